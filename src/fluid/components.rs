@@ -1,0 +1,70 @@
+//! Components of a fluid particle. See [`SphPlugin`](crate::fluid::SphPlugin).
+//!
+//! Spawning [`FluidParticle`] with a [`Position`] is enough: the marker requires the rest, and the
+//! solver fills in density, pressure and acceleration at the next step.
+
+use super::solver::NeighborList;
+use bevy::prelude::*;
+
+/// Marks an entity as an SPH fluid particle. Its required components carry the state the solver
+/// reads and writes; all particles share the mass given by
+/// [`SphParams::particle_mass`](crate::fluid::SphParams::particle_mass).
+///
+/// ```
+/// # use bevy::prelude::*;
+/// # use bevy_sph2d::prelude::*;
+/// fn pour(mut commands: Commands) {
+///     commands.spawn((FluidParticle, Position(Vec2::new(0.5, 1.0))));
+/// }
+/// ```
+#[derive(Component, Reflect, Debug, Clone, Copy, Default, PartialEq)]
+#[reflect(Component, Default, Debug, PartialEq)]
+#[require(
+    Position,
+    Velocity,
+    Acceleration,
+    Density,
+    Pressure,
+    NeighborSlot,
+    Neighbors
+)]
+pub struct FluidParticle;
+
+/// Position of a particle's centre in world space, m (y up).
+#[derive(Component, Reflect, Debug, Clone, Copy, Default, Deref, DerefMut, PartialEq)]
+#[reflect(Component, Default, Debug, PartialEq)]
+pub struct Position(pub Vec2);
+
+/// Velocity, m/s.
+#[derive(Component, Reflect, Debug, Clone, Copy, Default, Deref, DerefMut, PartialEq)]
+#[reflect(Component, Default, Debug, PartialEq)]
+pub struct Velocity(pub Vec2);
+
+/// Acceleration of the last sub-step, m/s²: pressure, viscosity and gravity as computed in
+/// [`SphSubstepSystems::Forces`](crate::fluid::SphSubstepSystems::Forces), plus whatever a game's
+/// own systems add in that set before [`SphSubstepSystems::Integrate`](crate::fluid::SphSubstepSystems::Integrate) consumes it.
+#[derive(Component, Reflect, Debug, Clone, Copy, Default, Deref, DerefMut, PartialEq)]
+#[reflect(Component, Default, Debug, PartialEq)]
+pub struct Acceleration(pub Vec2);
+
+/// SPH density (summation over neighbours, the particle itself included), kg/m³.
+#[derive(Component, Reflect, Debug, Clone, Copy, Default, Deref, DerefMut, PartialEq)]
+#[reflect(Component, Default, Debug, PartialEq)]
+pub struct Density(pub f32);
+
+/// Gauge pressure from the equation of state, Pa (zero at the free surface, never negative).
+#[derive(Component, Reflect, Debug, Clone, Copy, Default, Deref, DerefMut, PartialEq)]
+#[reflect(Component, Default, Debug, PartialEq)]
+pub struct Pressure(pub f32);
+
+/// Where the particle sits in the solver's cell-sorted neighbour snapshot this sub-step. Written
+/// by [`SphSubstepSystems::Neighbors`](crate::fluid::SphSubstepSystems::Neighbors); games can
+/// ignore it.
+#[derive(Component, Reflect, Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[reflect(Component, Default, Debug, PartialEq)]
+pub struct NeighborSlot(pub u32);
+
+/// The particle's fluid neighbours this sub-step (slots in the solver's snapshot), found while
+/// summing density and reused by the force pass. Solver scratch; games can ignore it.
+#[derive(Component, Debug, Clone, Copy, Default, Deref, DerefMut, PartialEq, Eq)]
+pub struct Neighbors(pub NeighborList);

@@ -1,0 +1,196 @@
+//! The SPH fluid plugin. See [`SphPlugin`].
+
+pub mod boundary;
+pub mod components;
+pub mod grid;
+pub mod kernels;
+pub mod params;
+pub mod slices;
+pub mod solver;
+pub mod spawn;
+pub mod systems;
+
+use bevy::ecs::intern::Interned;
+use bevy::ecs::schedule::{ScheduleLabel, SingleThreadedExecutor};
+use bevy::prelude::*;
+
+pub use boundary::{Obstacle, Tank};
+pub use components::{
+    Acceleration, Density, FluidParticle, NeighborSlot, Neighbors, Position, Pressure, Velocity,
+};
+pub use kernels::KernelKind;
+pub use params::{SphParams, SphParamsError};
+pub use spawn::FluidBlock;
+pub use systems::{SphParamsStatus, SphSolver, SphStats, SubstepClock, refresh_fluid_state};
+
+/// Weakly compressible SPH fluid, simulated in a fixed-step schedule ([`FixedUpdate`] by
+/// default) with a stable number of sub-steps per tick.
+///
+/// Spawn [`FluidParticle`]s (or queue a [`FluidBlock`]) and tune [`SphParams`]; read
+/// [`SphStats`]. Add [`Obstacle`] components for solids inside the tank.
+///
+/// # Schedule
+/// In the plugin's schedule, in order ([`SphSystems`]):
+/// 1. [`SphSystems::Prepare`]: validate changed [`SphParams`], re-sample walls and obstacles.
+/// 2. [`SphSystems::Simulate`]: split the tick into stable sub-steps and run the [`SphSubstep`]
+///    schedule once per sub-step. In it, in order ([`SphSubstepSystems`]):
+///    1. [`SphSubstepSystems::Neighbors`]: rebuild the cell grid and the sorted snapshot.
+///    2. [`SphSubstepSystems::Density`]: density and pressure (`par_iter_mut`), wall pressure.
+///    3. [`SphSubstepSystems::Forces`]: pressure, viscosity and gravity into [`Acceleration`]
+///       (`par_iter_mut`; this overwrites the previous sub-step's value).
+///    4. [`SphSubstepSystems::ExternalForces`]: empty, for your own forces: add to
+///       [`Acceleration`] with `+=`, e.g.
+///       `app.add_systems(SphSubstep, wind.in_set(SphSubstepSystems::ExternalForces))`.
+///    5. [`SphSubstepSystems::Integrate`]: choose the step, advance (`par_iter_mut`), keep
+///       particles in the tank and out of obstacles.
+/// 3. [`SphSystems::Finish`]: fill [`SphStats`].
+///
+/// Parallel iteration uses Bevy's `ComputeTaskPool`. On machines with few cores Bevy's default
+/// pool sizes leave one compute thread; set `TaskPoolPlugin`'s options to use them all.
+pub struct SphPlugin {
+    /// The schedule the fluid steps in.
+    pub schedule: Interned<dyn ScheduleLabel>,
+    /// Parameters inserted at start-up.
+    pub params: SphParams,
+    /// Fixed-step rate to set, Hz (`None` keeps the app's `Time<Fixed>`).
+    pub fixed_hz: Option<f64>,
+}
+
+impl Default for SphPlugin {
+    fn default() -> Self {
+        Self {
+            schedule: FixedUpdate.intern(),
+            params: SphParams::default(),
+            fixed_hz: None,
+        }
+    }
+}
+
+impl SphPlugin {
+    /// Steps the fluid in `schedule` instead of [`FixedUpdate`].
+    pub fn new(schedule: impl ScheduleLabel) -> Self {
+        Self {
+            schedule: schedule.intern(),
+            ..default()
+        }
+    }
+
+    /// Starts with these parameters.
+    pub fn with_params(mut self, params: SphParams) -> Self {
+        self.params = params;
+        self
+    }
+
+    /// Sets the app's fixed-step rate, Hz.
+    pub fn with_fixed_hz(mut self, hz: f64) -> Self {
+        self.fixed_hz = Some(hz);
+        self
+    }
+}
+
+/// The fluid's stages in the plugin's schedule, chained in this order.
+#[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum SphSystems {
+    /// Parameter validation and wall sampling.
+    Prepare,
+    /// All sub-steps of this tick (runs [`SphSubstep`]).
+    Simulate,
+    /// Statistics.
+    Finish,
+}
+
+/// The stages of one sub-step in [`SphSubstep`], chained in this order.
+#[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum SphSubstepSystems {
+    /// Cell grid and sorted snapshot.
+    Neighbors,
+    /// Density, pressure, wall pressure.
+    Density,
+    /// Accelerations from pressure, viscosity and gravity.
+    Forces,
+    /// A game's own forces, added to [`Acceleration`] before integration.
+    ExternalForces,
+    /// Time step, integration, collisions.
+    Integrate,
+}
+
+/// The schedule of one fluid sub-step, run as many times per tick as stability needs.
+#[derive(ScheduleLabel, Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct SphSubstep;
+
+impl Plugin for SphPlugin {
+    fn build(&self, app: &mut App) {
+        if let Err(error) = self.params.validate() {
+            error!("SphPlugin: {error}; starting with SphParams::default() until it is fixed");
+        }
+        if let Some(hz) = self.fixed_hz {
+            app.insert_resource(Time::<Fixed>::from_hz(hz));
+        }
+        app.register_type::<SphParams>()
+            .register_type::<SphStats>()
+            .register_type::<FluidParticle>()
+            .register_type::<Position>()
+            .register_type::<Velocity>()
+            .register_type::<Acceleration>()
+            .register_type::<Density>()
+            .register_type::<Pressure>()
+            .register_type::<NeighborSlot>()
+            .register_type::<Obstacle>()
+            .insert_resource(self.params.clone())
+            .init_resource::<SphSolver>()
+            .init_resource::<SphStats>()
+            .init_resource::<SphParamsStatus>();
+
+        let mut substep = Schedule::new(SphSubstep);
+        substep.set_executor(SingleThreadedExecutor::new());
+        substep.configure_sets(
+            (
+                SphSubstepSystems::Neighbors,
+                SphSubstepSystems::Density,
+                SphSubstepSystems::Forces,
+                SphSubstepSystems::ExternalForces,
+                SphSubstepSystems::Integrate,
+            )
+                .chain(),
+        );
+        substep.add_systems((
+            systems::build_neighbor_grid.in_set(SphSubstepSystems::Neighbors),
+            (
+                systems::compute_density,
+                systems::share_density,
+                systems::compute_wall_pressure,
+            )
+                .chain()
+                .in_set(SphSubstepSystems::Density),
+            systems::compute_forces.in_set(SphSubstepSystems::Forces),
+            (systems::choose_time_step, systems::integrate_particles)
+                .chain()
+                .in_set(SphSubstepSystems::Integrate),
+        ));
+        app.add_schedule(substep);
+
+        app.configure_sets(
+            self.schedule,
+            (
+                SphSystems::Prepare,
+                SphSystems::Simulate,
+                SphSystems::Finish,
+            )
+                .chain(),
+        )
+        .add_systems(
+            self.schedule,
+            (
+                (
+                    systems::apply_params,
+                    systems::reject_invalid_particles,
+                    systems::rebuild_walls,
+                )
+                    .chain()
+                    .in_set(SphSystems::Prepare),
+                systems::run_substeps.in_set(SphSystems::Simulate),
+                systems::update_stats.in_set(SphSystems::Finish),
+            ),
+        );
+    }
+}

@@ -1,0 +1,390 @@
+//! Runtime-tunable fluid parameters in SI units, and their validation. See
+//! [`SphPlugin`](crate::fluid::SphPlugin).
+
+use super::boundary::Tank;
+use super::kernels::{self, KernelKind};
+use super::solver::SphConstants;
+use bevy::prelude::*;
+use core::fmt;
+
+/// Standard gravity, m/s².
+pub const STANDARD_GRAVITY: f32 = 9.81;
+
+/// The fluid's parameters, in SI units (metres, seconds, kilograms; 2D masses and densities are
+/// per metre of depth, so densities keep their 3D values in kg/m³).
+///
+/// Edit the resource at any time: the solver validates every change with
+/// [`validate`](Self::validate) before using it. A change that fails is not applied: the solver
+/// keeps the last valid parameters, logs the error, and shows it in
+/// [`SphParamsStatus`](crate::fluid::SphParamsStatus).
+///
+/// The particle spacing and kernel fix each particle's mass, so change them together with a
+/// respawn; everything else can change live.
+#[derive(Resource, Reflect, Debug, Clone, PartialEq)]
+#[reflect(Resource, Default, Debug, PartialEq)]
+pub struct SphParams {
+    /// Rest density `ρ₀`, kg/m³ (water: 1000).
+    pub rest_density: f32,
+    /// Speed of sound `c₀`, m/s. Weakly compressible SPH keeps density errors near
+    /// `(v/c₀)²`, so pick about ten times the fastest flow speed (see
+    /// [`speed_of_sound_for_height`](Self::speed_of_sound_for_height)); larger values cost smaller
+    /// time steps.
+    pub speed_of_sound: f32,
+    /// Exponent `γ` of the Tait equation of state (7 for water; 1 gives a linear law).
+    pub eos_exponent: f32,
+    /// Kinematic viscosity `ν`, m²/s (water: 1.0e-6; honey about 5e-3).
+    pub kinematic_viscosity: f32,
+    /// Monaghan's artificial viscosity `α`, dimensionless (0.01–0.1): damps the acoustic noise of
+    /// a weakly compressible fluid; keep it small for water.
+    pub artificial_viscosity: f32,
+    /// Initial particle spacing `Δx`, m. Sets particle mass and the resolution.
+    pub particle_spacing: f32,
+    /// Kernel support radius over particle spacing, `H/Δx` (1.5–5; 2 gives about 11 neighbours,
+    /// 2.6 about 21).
+    pub support_ratio: f32,
+    /// Which kernels compute density and gradients.
+    pub kernel: KernelKind,
+    /// Gravity, m/s² (default `(0, −9.81)`); tilt it to slosh the tank.
+    pub gravity: Vec2,
+    /// The rectangular tank, inner corner at the origin; `None` leaves the fluid unbounded.
+    pub tank: Option<Tank>,
+    /// Courant number of the acoustic time-step limit, 0–1 (0.4 is standard).
+    pub cfl_number: f32,
+    /// Most sub-steps in one fixed tick. If stability needs more, the rest of the tick is dropped
+    /// (the fluid runs slower than real time) instead of the simulation blowing up.
+    pub max_substeps: u32,
+    /// Restitution of the geometric wall collision that backs up the boundary particles, 0–1.
+    pub wall_restitution: f32,
+}
+
+impl Default for SphParams {
+    fn default() -> Self {
+        Self::water()
+    }
+}
+
+/// Why a [`SphParams`] value was refused.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SphParamsError {
+    /// The offending field.
+    pub field: &'static str,
+    /// What is wrong, with the value and the accepted range.
+    pub message: String,
+}
+
+impl fmt::Display for SphParamsError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "invalid SphParams.{}: {}", self.field, self.message)
+    }
+}
+
+impl std::error::Error for SphParamsError {}
+
+/// Most wall particles a tank may need before validation refuses it (memory guard).
+pub const MAX_WALL_PARTICLES: u64 = 4_000_000;
+
+impl SphParams {
+    /// Water in a 2 m × 1.2 m tank at 2 cm spacing.
+    pub fn water() -> Self {
+        Self {
+            rest_density: 1000.0,
+            speed_of_sound: Self::speed_of_sound_for_height(1.0),
+            eos_exponent: 7.0,
+            kinematic_viscosity: 1.0e-6,
+            artificial_viscosity: 0.02,
+            particle_spacing: 0.02,
+            support_ratio: 2.5,
+            kernel: KernelKind::WendlandC2,
+            gravity: Vec2::new(0.0, -STANDARD_GRAVITY),
+            tank: Some(Tank::new(2.0, 1.2)),
+            cfl_number: 0.4,
+            max_substeps: 400,
+            wall_restitution: 0.0,
+        }
+    }
+
+    /// A speed of sound for free-surface flow from a fluid column `height` (m) high:
+    /// `20 √(g h)`, ten times the fastest speed a collapsing column reaches (`2√(g h)`).
+    pub fn speed_of_sound_for_height(height: f32) -> f32 {
+        20.0 * (STANDARD_GRAVITY * height.max(1e-6)).sqrt()
+    }
+
+    /// Kernel support radius `H = support_ratio · particle_spacing`, m.
+    pub fn support_radius(&self) -> f32 {
+        self.support_ratio * self.particle_spacing
+    }
+
+    /// Mass of each particle, kg per metre of depth: `ρ₀` divided by the density kernel's sum
+    /// over a square lattice of the particle spacing, so an interior particle of a freshly
+    /// spawned block has exactly rest density (within 2% of `ρ₀Δx²` for the default kernel).
+    pub fn particle_mass(&self) -> f32 {
+        let h = self.support_radius();
+        let sum = match self.kernel {
+            KernelKind::WendlandC2 => {
+                kernels::lattice_sum(&kernels::WendlandC2::new(h), self.particle_spacing)
+            }
+            KernelKind::CubicSpline => {
+                kernels::lattice_sum(&kernels::CubicSpline::new(h), self.particle_spacing)
+            }
+            KernelKind::Muller => {
+                kernels::lattice_sum(&kernels::Poly6::new(h), self.particle_spacing)
+            }
+        };
+        (self.rest_density as f64 / sum) as f32
+    }
+
+    /// Layers of wall particles needed so a particle at a wall has a full neighbourhood.
+    pub fn wall_layers(&self) -> u32 {
+        (self.support_ratio.ceil() as u32).max(1)
+    }
+
+    /// Checks every field; the first problem found is returned with the field's name, its value
+    /// and the accepted range.
+    pub fn validate(&self) -> Result<(), SphParamsError> {
+        fn range(
+            field: &'static str,
+            value: f32,
+            min: f32,
+            max: f32,
+            unit: &str,
+        ) -> Result<(), SphParamsError> {
+            if value.is_finite() && value >= min && value <= max {
+                Ok(())
+            } else {
+                Err(SphParamsError {
+                    field,
+                    message: format!("{value} {unit} is outside {min}..={max} {unit}"),
+                })
+            }
+        }
+        fn positive(
+            field: &'static str,
+            value: f32,
+            max: f32,
+            unit: &str,
+        ) -> Result<(), SphParamsError> {
+            if value.is_finite() && value > 0.0 && value <= max {
+                Ok(())
+            } else {
+                Err(SphParamsError {
+                    field,
+                    message: format!("{value} {unit} must be positive and at most {max} {unit}"),
+                })
+            }
+        }
+        positive("rest_density", self.rest_density, 1.0e5, "kg/m³")?;
+        positive("speed_of_sound", self.speed_of_sound, 1.0e4, "m/s")?;
+        range("eos_exponent", self.eos_exponent, 1.0, 10.0, "")?;
+        range(
+            "kinematic_viscosity",
+            self.kinematic_viscosity,
+            0.0,
+            100.0,
+            "m²/s",
+        )?;
+        range(
+            "artificial_viscosity",
+            self.artificial_viscosity,
+            0.0,
+            10.0,
+            "",
+        )?;
+        range(
+            "particle_spacing",
+            self.particle_spacing,
+            1.0e-5,
+            100.0,
+            "m",
+        )?;
+        range("support_ratio", self.support_ratio, 1.5, 5.0, "spacings").map_err(|e| {
+            SphParamsError {
+                message: format!(
+                    "{}: the kernel support {} m must span 1.5 to 5 particle spacings ({} m), \
+                     or particles see too few (or far too many) neighbours",
+                    e.message,
+                    self.support_ratio * self.particle_spacing,
+                    self.particle_spacing
+                ),
+                ..e
+            }
+        })?;
+        if !self.gravity.is_finite() || self.gravity.length() > 1.0e4 {
+            return Err(SphParamsError {
+                field: "gravity",
+                message: format!(
+                    "{} m/s² must be finite and at most 1e4 m/s² long",
+                    self.gravity
+                ),
+            });
+        }
+        range("cfl_number", self.cfl_number, 0.01, 1.0, "")?;
+        if self.max_substeps == 0 || self.max_substeps > 100_000 {
+            return Err(SphParamsError {
+                field: "max_substeps",
+                message: format!("{} is outside 1..=100000", self.max_substeps),
+            });
+        }
+        range("wall_restitution", self.wall_restitution, 0.0, 1.0, "")?;
+        if let Some(tank) = &self.tank {
+            for (field, value) in [("tank.width", tank.width), ("tank.height", tank.height)] {
+                if !(value.is_finite() && value >= self.particle_spacing && value <= 1.0e4) {
+                    return Err(SphParamsError {
+                        field,
+                        message: format!(
+                            "{value} m must be finite, at least one particle spacing ({} m) \
+                             and at most 1e4 m",
+                            self.particle_spacing
+                        ),
+                    });
+                }
+            }
+            let walls = tank.sample_count(self.particle_spacing, self.wall_layers());
+            if walls > MAX_WALL_PARTICLES {
+                return Err(SphParamsError {
+                    field: "tank",
+                    message: format!(
+                        "a {} m × {} m tank at {} m spacing needs {walls} wall particles \
+                         (limit {MAX_WALL_PARTICLES}); use a coarser spacing or a smaller tank",
+                        tank.width, tank.height, self.particle_spacing
+                    ),
+                });
+            }
+        }
+        let mass = self.particle_mass();
+        if !(mass.is_finite() && mass > 0.0) {
+            return Err(SphParamsError {
+                field: "particle_spacing",
+                message: format!("gives a particle mass of {mass} kg/m"),
+            });
+        }
+        Ok(())
+    }
+
+    /// The derived constants the solver runs on, if the parameters are valid.
+    pub fn constants(&self) -> Result<SphConstants, SphParamsError> {
+        self.validate()?;
+        let support = self.support_radius();
+        let stiffness =
+            self.rest_density * self.speed_of_sound * self.speed_of_sound / self.eos_exponent;
+        Ok(SphConstants {
+            kernel: self.kernel,
+            spacing: self.particle_spacing,
+            support,
+            support_sq: support * support,
+            smoothing_length: 0.5 * support,
+            mass: self.particle_mass(),
+            rest_density: self.rest_density,
+            speed_of_sound: self.speed_of_sound,
+            eos_exponent: self.eos_exponent,
+            stiffness,
+            artificial_viscosity: self.artificial_viscosity,
+            kinematic_viscosity: self.kinematic_viscosity,
+            gravity: self.gravity,
+            cfl_number: self.cfl_number,
+            speed_limit: self.speed_of_sound,
+            wall_restitution: self.wall_restitution,
+            tank: self.tank,
+            wall_layers: self.wall_layers(),
+            max_substeps: self.max_substeps,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_are_valid() {
+        assert_eq!(SphParams::default().validate(), Ok(()));
+        let c = SphParams::default().constants().unwrap();
+        assert!(c.mass > 0.0 && c.stiffness > 0.0);
+    }
+
+    #[test]
+    fn bad_values_are_refused_with_the_field_named() {
+        type Breakage = Box<dyn Fn(&mut SphParams)>;
+        let cases: Vec<(&str, Breakage)> = vec![
+            ("rest_density", Box::new(|p| p.rest_density = -1.0)),
+            ("rest_density", Box::new(|p| p.rest_density = 0.0)),
+            ("speed_of_sound", Box::new(|p| p.speed_of_sound = f32::NAN)),
+            ("eos_exponent", Box::new(|p| p.eos_exponent = 0.0)),
+            (
+                "kinematic_viscosity",
+                Box::new(|p| p.kinematic_viscosity = -1e-6),
+            ),
+            (
+                "artificial_viscosity",
+                Box::new(|p| p.artificial_viscosity = f32::INFINITY),
+            ),
+            ("particle_spacing", Box::new(|p| p.particle_spacing = 0.0)),
+            ("support_ratio", Box::new(|p| p.support_ratio = 0.9)),
+            ("support_ratio", Box::new(|p| p.support_ratio = 12.0)),
+            (
+                "gravity",
+                Box::new(|p| p.gravity = Vec2::new(0.0, f32::NAN)),
+            ),
+            ("cfl_number", Box::new(|p| p.cfl_number = 0.0)),
+            ("max_substeps", Box::new(|p| p.max_substeps = 0)),
+            ("wall_restitution", Box::new(|p| p.wall_restitution = 1.5)),
+            (
+                "tank.width",
+                Box::new(|p| p.tank = Some(Tank::new(-1.0, 1.0))),
+            ),
+            (
+                "tank.height",
+                Box::new(|p| p.tank = Some(Tank::new(1.0, 0.001))),
+            ),
+            (
+                "tank",
+                Box::new(|p| {
+                    p.tank = Some(Tank::new(5000.0, 5000.0));
+                    p.particle_spacing = 0.001;
+                }),
+            ),
+        ];
+        for (field, break_it) in cases {
+            let mut p = SphParams::default();
+            break_it(&mut p);
+            let err = p.validate().expect_err(field);
+            assert_eq!(err.field, field, "{err}");
+            assert!(err.to_string().contains(field));
+            assert!(p.constants().is_err());
+        }
+    }
+
+    #[test]
+    fn support_ratio_error_explains_itself() {
+        let p = SphParams {
+            support_ratio: 1.0,
+            ..default()
+        };
+        let msg = p.validate().unwrap_err().to_string();
+        assert!(msg.contains("spacing"), "{msg}");
+    }
+
+    #[test]
+    fn particle_mass_is_close_to_rest_density_times_cell_area() {
+        for kernel in KernelKind::ALL {
+            for ratio in [2.0, 2.6, 3.0] {
+                let p = SphParams {
+                    kernel,
+                    support_ratio: ratio,
+                    ..default()
+                };
+                let naive = p.rest_density * p.particle_spacing * p.particle_spacing;
+                let m = p.particle_mass();
+                assert!(
+                    (m / naive - 1.0).abs() < 0.1,
+                    "{kernel:?} at ratio {ratio}: mass {m} vs ρ₀Δx² {naive}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn sound_speed_scales_with_height() {
+        let c = SphParams::speed_of_sound_for_height(0.3);
+        assert!((c - 20.0 * (9.81f32 * 0.3).sqrt()).abs() < 1e-4);
+    }
+}

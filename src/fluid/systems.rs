@@ -1,0 +1,507 @@
+//! The fluid's ECS systems: thin glue that gathers particles into the solver's cell-sorted
+//! snapshot and calls the maths in [`solver`](super::solver) from `par_iter_mut`. See
+//! [`SphPlugin`](crate::fluid::SphPlugin) for the schedule they run in.
+
+use super::SphSubstep;
+use super::boundary::Obstacle;
+use super::components::{
+    Acceleration, Density, FluidParticle, NeighborSlot, Neighbors, Position, Pressure, Velocity,
+};
+use super::params::{SphParams, SphParamsError};
+use super::solver::{
+    FluidSnapshot, SphConstants, Walls, acceleration_at, advance_particle,
+    density_and_neighbors_at, plan_substep, pressure_from_density, stable_time_step, wall_state_at,
+    with_kernels,
+};
+use bevy::ecs::batching::BatchingStrategy;
+use bevy::platform::time::Instant;
+use bevy::prelude::*;
+use bevy::tasks::{ComputeTaskPool, ParallelSliceMut};
+use core::sync::atomic::{AtomicU32, Ordering};
+
+/// Several batches per thread even out the uneven cost of particles (a free-surface particle
+/// has half the neighbours of an interior one).
+const BATCHING: BatchingStrategy = BatchingStrategy {
+    batch_size_limits: 256..usize::MAX,
+    batches_per_thread: 4,
+};
+
+/// The solver's working state: derived constants, the neighbour snapshot, the wall particles
+/// and the sub-step clock. Read it for diagnostics; the systems own it.
+#[derive(Resource, Debug, Clone)]
+pub struct SphSolver {
+    constants: SphConstants,
+    snapshot: FluidSnapshot,
+    walls: Walls,
+    walls_dirty: bool,
+    gathered_position: Vec<Vec2>,
+    gathered_velocity: Vec<Vec2>,
+    clock: SubstepClock,
+    non_finite: u64,
+}
+
+impl Default for SphSolver {
+    fn default() -> Self {
+        Self::new(
+            SphParams::default()
+                .constants()
+                .expect("the default parameters are valid"),
+        )
+    }
+}
+
+impl SphSolver {
+    fn new(constants: SphConstants) -> Self {
+        Self {
+            constants,
+            snapshot: FluidSnapshot::default(),
+            walls: Walls::default(),
+            walls_dirty: true,
+            gathered_position: Vec::new(),
+            gathered_velocity: Vec::new(),
+            clock: SubstepClock::default(),
+            non_finite: 0,
+        }
+    }
+
+    /// The constants in use: those of the last valid [`SphParams`].
+    pub fn constants(&self) -> &SphConstants {
+        &self.constants
+    }
+
+    /// Wall particles of the tank and obstacles, with their current pressures.
+    pub fn walls(&self) -> &Walls {
+        &self.walls
+    }
+
+    /// The cell-sorted snapshot of the last sub-step.
+    pub fn snapshot(&self) -> &FluidSnapshot {
+        &self.snapshot
+    }
+
+    /// The sub-step clock.
+    pub fn clock(&self) -> &SubstepClock {
+        &self.clock
+    }
+}
+
+/// How the current tick is being split into sub-steps, and the simulated time so far.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct SubstepClock {
+    /// Length of the current tick, s.
+    pub tick: f64,
+    /// What is left of it, s.
+    pub remaining: f64,
+    /// Sub-steps taken in the current tick.
+    pub substeps: u32,
+    /// The sub-step being integrated (or last integrated), s.
+    pub dt: f32,
+    /// The stability limit at the last sub-step, s.
+    pub stable_dt: f32,
+    /// Largest acceleration at the last sub-step, m/s².
+    pub max_acceleration: f32,
+    /// Simulated time, s.
+    pub time: f64,
+    /// Sub-steps taken since start-up.
+    pub total_substeps: u64,
+    /// Simulated time dropped because ticks needed more than `max_substeps`, s.
+    pub dropped: f64,
+}
+
+impl SubstepClock {
+    fn begin_tick(&mut self, tick: f64) {
+        self.tick = tick;
+        self.remaining = tick;
+        self.substeps = 0;
+    }
+
+    fn wants_substep(&self, max_substeps: u32) -> bool {
+        self.remaining > 1e-9 * self.tick && self.substeps < max_substeps
+    }
+
+    fn end_tick(&mut self) {
+        if self.remaining > 1e-9 * self.tick {
+            self.dropped += self.remaining;
+        }
+        self.remaining = 0.0;
+    }
+}
+
+/// Whether the last change to [`SphParams`] was accepted.
+#[derive(Resource, Debug, Clone, Default, PartialEq)]
+pub struct SphParamsStatus {
+    /// Why the current [`SphParams`] were refused (the solver runs on the last valid ones), or
+    /// `None` if they are in use.
+    pub error: Option<SphParamsError>,
+}
+
+/// Statistics of the last fixed tick, for panels and logs.
+#[derive(Resource, Reflect, Debug, Clone, Default, PartialEq)]
+#[reflect(Resource, Default, Debug)]
+pub struct SphStats {
+    /// Fluid particles.
+    pub particles: usize,
+    /// Wall particles of the tank and obstacles.
+    pub wall_particles: usize,
+    /// Sub-steps in the last tick.
+    pub substeps: u32,
+    /// Length of the last sub-step, s.
+    pub dt: f32,
+    /// Simulated time, s.
+    pub time: f64,
+    /// Simulated time dropped because a tick needed more than `max_substeps`, s.
+    pub dropped_time: f64,
+    /// Wall-clock time the last tick's sub-steps took, ms.
+    pub tick_ms: f32,
+    /// Fastest particle, m/s.
+    pub max_speed: f32,
+    /// Largest compression `(ρ − ρ₀)/ρ₀`, % (free-surface particles read below `ρ₀` by design of
+    /// summation density, so only compression counts as error).
+    pub max_density_error: f32,
+    /// Mean compression over all particles, %.
+    pub mean_density_error: f32,
+    /// Particle updates that would have produced a non-finite value and were held back (should
+    /// stay zero).
+    pub non_finite_resets: u64,
+}
+
+/// Validates a changed [`SphParams`] and adopts it, or keeps the last valid one and reports why.
+pub(crate) fn apply_params(
+    params: Res<SphParams>,
+    mut solver: ResMut<SphSolver>,
+    mut status: ResMut<SphParamsStatus>,
+) {
+    if !params.is_changed() {
+        return;
+    }
+    match params.constants() {
+        Ok(constants) => {
+            let old = solver.constants;
+            let geometry_changed = old.tank != constants.tank
+                || old.spacing != constants.spacing
+                || old.support != constants.support
+                || old.wall_layers != constants.wall_layers;
+            if old != constants {
+                solver.constants = constants;
+            }
+            if geometry_changed {
+                solver.walls_dirty = true;
+            }
+            status.set_if_neq(SphParamsStatus { error: None });
+        }
+        Err(error) => {
+            if status.error.as_ref() != Some(&error) {
+                error!("{error}; the fluid keeps running on the last valid parameters");
+                status.error = Some(error);
+            }
+        }
+    }
+}
+
+/// Despawns particles spawned at a non-finite position (with a warning): they could never take
+/// part in the flow.
+pub(crate) fn reject_invalid_particles(
+    mut commands: Commands,
+    added: Query<(Entity, &Position, &Velocity), Added<FluidParticle>>,
+) {
+    for (entity, position, velocity) in &added {
+        if !position.is_finite() || !velocity.is_finite() {
+            warn!(
+                "fluid particle {entity} spawned at position {} with velocity {}: not finite, \
+                 despawned",
+                position.0, velocity.0
+            );
+            commands.entity(entity).despawn();
+        }
+    }
+}
+
+/// Re-samples the wall particles when the tank, spacing or obstacles change.
+pub(crate) fn rebuild_walls(
+    mut solver: ResMut<SphSolver>,
+    obstacles: Query<&Obstacle>,
+    changed: Query<(), Changed<Obstacle>>,
+    mut removed: RemovedComponents<Obstacle>,
+) {
+    let removed_any = removed.read().count() > 0;
+    if !(solver.walls_dirty || removed_any || !changed.is_empty()) {
+        return;
+    }
+    let list: Vec<Obstacle> = obstacles.iter().copied().collect();
+    for obstacle in list.iter().filter(|o| !o.is_valid()) {
+        warn!("ignoring obstacle {obstacle:?}: coordinates must be finite and radii positive");
+    }
+    let solver = &mut *solver;
+    solver.walls.rebuild(&solver.constants, &list);
+    solver.walls_dirty = false;
+}
+
+/// Recomputes density, pressure, wall pressure and acceleration of every particle from the
+/// current positions and velocities, without advancing time: for reading a consistent state
+/// right after spawning (the solver otherwise computes them during the next sub-step).
+pub fn refresh_fluid_state(world: &mut World) {
+    let results = [
+        world.run_system_cached(apply_params),
+        world.run_system_cached(reject_invalid_particles),
+        world.run_system_cached(rebuild_walls),
+        world.run_system_cached(build_neighbor_grid),
+        world.run_system_cached(compute_density),
+        world.run_system_cached(share_density),
+        world.run_system_cached(compute_wall_pressure),
+        world.run_system_cached(compute_forces),
+    ];
+    for error in results.into_iter().filter_map(Result::err) {
+        error!("refresh_fluid_state: {error}");
+    }
+}
+
+/// Splits the tick into stable sub-steps and runs [`SphSubstep`] once for each.
+pub(crate) fn run_substeps(world: &mut World) {
+    let tick = world.resource::<Time>().delta_secs_f64();
+    if tick <= 0.0 {
+        return;
+    }
+    let started = Instant::now();
+    world.resource_mut::<SphSolver>().clock.begin_tick(tick);
+    loop {
+        let solver = world.resource::<SphSolver>();
+        if !solver.clock.wants_substep(solver.constants.max_substeps) {
+            break;
+        }
+        world.run_schedule(SphSubstep);
+    }
+    world.resource_mut::<SphSolver>().clock.end_tick();
+    world.resource_mut::<SphStats>().tick_ms = started.elapsed().as_secs_f32() * 1000.0;
+}
+
+/// [`SphSubstepSystems::Neighbors`](super::SphSubstepSystems::Neighbors): copies positions and
+/// velocities into the cell-sorted snapshot and tells each particle its slot.
+pub(crate) fn build_neighbor_grid(
+    mut solver: ResMut<SphSolver>,
+    mut particles: Query<(&Position, &Velocity, &mut NeighborSlot), With<FluidParticle>>,
+) {
+    let solver = &mut *solver;
+    solver.gathered_position.clear();
+    solver.gathered_velocity.clear();
+    for (position, velocity, _) in &particles {
+        solver.gathered_position.push(position.0);
+        solver.gathered_velocity.push(velocity.0);
+    }
+    solver.snapshot.rebuild(
+        &solver.constants,
+        &solver.gathered_position,
+        &solver.gathered_velocity,
+    );
+    // Same query, same system, no structural change in between: the same order as above.
+    for ((_, _, mut slot), &s) in particles.iter_mut().zip(solver.snapshot.grid().slot_of()) {
+        slot.0 = s;
+    }
+}
+
+/// [`SphSubstepSystems::Density`](super::SphSubstepSystems::Density): summed density and the
+/// equation of state, per particle in parallel.
+pub(crate) fn compute_density(
+    solver: Res<SphSolver>,
+    mut particles: Query<
+        (&Position, &mut Density, &mut Pressure, &mut Neighbors),
+        With<FluidParticle>,
+    >,
+) {
+    let solver = &*solver;
+    let c = solver.constants;
+    with_kernels!(c.kernel, c.support, |w, _g| {
+        particles
+            .par_iter_mut()
+            .batching_strategy(BATCHING)
+            .for_each(|(position, mut density, mut pressure, mut neighbors)| {
+                let rho = density_and_neighbors_at(
+                    &w,
+                    &c,
+                    position.0,
+                    &solver.snapshot,
+                    &solver.walls,
+                    &mut neighbors.0,
+                );
+                density.0 = rho;
+                pressure.0 = pressure_from_density(&c, rho);
+            });
+    });
+}
+
+/// Copies densities and pressures into the snapshot for the neighbour reads of the force stage.
+pub(crate) fn share_density(
+    mut solver: ResMut<SphSolver>,
+    particles: Query<(&NeighborSlot, &Density, &Pressure), With<FluidParticle>>,
+) {
+    let snapshot = &mut solver.snapshot;
+    let n = snapshot.len();
+    for (slot, density, pressure) in &particles {
+        let slot = slot.0 as usize;
+        if slot < n && density.0 > 0.0 {
+            snapshot.set_pressure(slot, density.0, pressure.0);
+        }
+    }
+}
+
+/// Extrapolates the fluid's pressure onto the wall particles, in parallel chunks.
+pub(crate) fn compute_wall_pressure(mut solver: ResMut<SphSolver>) {
+    let solver = &mut *solver;
+    let c = solver.constants;
+    let fluid = &solver.snapshot;
+    if solver.walls.is_empty() {
+        return;
+    }
+    let pool = ComputeTaskPool::get();
+    let chunk = solver
+        .walls
+        .len()
+        .div_ceil(4 * pool.thread_num().max(1))
+        .max(64);
+    with_kernels!(c.kernel, c.support, |w, _g| {
+        solver.walls.update_pressure(|mut states, points| {
+            states.par_chunk_map_mut(pool, chunk, |index, states| {
+                for (k, state) in states.iter_mut().enumerate() {
+                    *state = wall_state_at(&w, &c, points.get(index * chunk + k), fluid);
+                }
+            });
+        });
+    });
+}
+
+/// What the force pass reads and writes per particle.
+type ForceData = (
+    &'static Position,
+    &'static Velocity,
+    &'static Density,
+    &'static Pressure,
+    &'static Neighbors,
+    &'static mut Acceleration,
+);
+
+/// [`SphSubstepSystems::Forces`](super::SphSubstepSystems::Forces): pressure, viscosity and
+/// gravity, per particle in parallel. Overwrites [`Acceleration`]; add your own forces after it.
+pub(crate) fn compute_forces(
+    solver: Res<SphSolver>,
+    mut particles: Query<ForceData, With<FluidParticle>>,
+) {
+    let solver = &*solver;
+    let c = solver.constants;
+    with_kernels!(c.kernel, c.support, |_w, g| {
+        particles
+            .par_iter_mut()
+            .batching_strategy(BATCHING)
+            .for_each(
+                |(position, velocity, density, pressure, neighbors, mut acceleration)| {
+                    acceleration.0 = acceleration_at(
+                        &g,
+                        &c,
+                        position.0,
+                        velocity.0,
+                        density.0,
+                        pressure.0,
+                        &neighbors.0,
+                        &solver.snapshot,
+                        &solver.walls,
+                    );
+                },
+            );
+    });
+}
+
+/// Picks the sub-step length from the stability limits and what is left of the tick.
+pub(crate) fn choose_time_step(
+    mut solver: ResMut<SphSolver>,
+    particles: Query<&Acceleration, With<FluidParticle>>,
+) {
+    let max_acceleration = particles
+        .iter()
+        .fold(0.0f32, |m, a| m.max(a.length_squared()))
+        .sqrt();
+    let solver = &mut *solver;
+    let c = solver.constants;
+    let stable = stable_time_step(&c, solver.snapshot.max_speed, max_acceleration);
+    let clock = &mut solver.clock;
+    let dt = if solver.snapshot.is_empty() {
+        clock.remaining as f32
+    } else if clock.substeps + 1 >= c.max_substeps {
+        stable.min(clock.remaining as f32)
+    } else {
+        plan_substep(clock.remaining, stable)
+    };
+    clock.dt = dt;
+    clock.stable_dt = stable;
+    clock.max_acceleration = max_acceleration;
+    clock.remaining -= dt as f64;
+    clock.time += dt as f64;
+    clock.substeps += 1;
+    clock.total_substeps += 1;
+}
+
+/// [`SphSubstepSystems::Integrate`](super::SphSubstepSystems::Integrate): symplectic Euler,
+/// walls and obstacles, per particle in parallel.
+pub(crate) fn integrate_particles(
+    mut solver: ResMut<SphSolver>,
+    mut particles: Query<(&mut Position, &mut Velocity, &Acceleration), With<FluidParticle>>,
+) {
+    let non_finite = AtomicU32::new(0);
+    {
+        let solver = &*solver;
+        let c = solver.constants;
+        let dt = solver.clock.dt;
+        let obstacles = &solver.walls.obstacles;
+        particles
+            .par_iter_mut()
+            .batching_strategy(BATCHING)
+            .for_each(|(mut position, mut velocity, acceleration)| {
+                if !advance_particle(
+                    &c,
+                    obstacles,
+                    &mut position.0,
+                    &mut velocity.0,
+                    acceleration.0,
+                    dt,
+                ) {
+                    non_finite.fetch_add(1, Ordering::Relaxed);
+                }
+            });
+    }
+    solver.non_finite += non_finite.into_inner() as u64;
+}
+
+/// Fills [`SphStats`] after the tick.
+pub(crate) fn update_stats(
+    solver: Res<SphSolver>,
+    particles: Query<(&Velocity, &Density), With<FluidParticle>>,
+    mut stats: ResMut<SphStats>,
+) {
+    let rest = solver.constants.rest_density;
+    let mut count = 0usize;
+    let mut max_speed_sq = 0.0f32;
+    let mut max_error = 0.0f32;
+    let mut sum_error = 0.0f64;
+    for (velocity, density) in &particles {
+        count += 1;
+        max_speed_sq = max_speed_sq.max(velocity.length_squared());
+        let error = (density.0 / rest - 1.0).max(0.0);
+        max_error = max_error.max(error);
+        sum_error += error as f64;
+    }
+    let clock = solver.clock;
+    *stats = SphStats {
+        particles: count,
+        wall_particles: solver.walls.len(),
+        substeps: clock.substeps,
+        dt: clock.dt,
+        time: clock.time,
+        dropped_time: clock.dropped,
+        tick_ms: stats.tick_ms,
+        max_speed: max_speed_sq.sqrt(),
+        max_density_error: 100.0 * max_error,
+        mean_density_error: if count > 0 {
+            (100.0 * sum_error / count as f64) as f32
+        } else {
+            0.0
+        },
+        non_finite_resets: solver.non_finite,
+    };
+}

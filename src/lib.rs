@@ -1,0 +1,85 @@
+//! # bevy_sph2d
+//!
+//! Bevy plugins for real-time 2D particle physics: a weakly compressible SPH fluid in SI units,
+//! stepped in `FixedUpdate` with `par_iter_mut` and an O(n) cell-list neighbour search.
+//!
+//! ```no_run
+//! use bevy::prelude::*;
+//! use bevy_sph2d::prelude::*;
+//!
+//! fn main() {
+//!     App::new()
+//!         .add_plugins((MinimalPlugins, ParticlePlugins))
+//!         .add_systems(Startup, |mut commands: Commands| {
+//!             // A 0.5 m × 1 m column of water against the left wall of the default tank.
+//!             commands.queue(FluidBlock::dam_break(0.5, 1.0));
+//!         })
+//!         .run();
+//! }
+//! ```
+//!
+//! - [`SphPlugin`](fluid::SphPlugin): the fluid; [`SphParams`](fluid::SphParams) tunes it.
+//! - [`ParticlePlugins`]: every plugin of the crate, as a group.
+//!
+//! The pure algorithms ([`fluid::kernels`], [`fluid::grid`], [`fluid::solver`],
+//! [`fluid::boundary`]) have no ECS in them and can be used on their own;
+//! [`fluid::slices::SliceFluid`] runs the whole solver on plain vectors.
+
+pub mod fluid;
+
+use bevy::app::{
+    PluginGroup, PluginGroupBuilder, TaskPoolOptions, TaskPoolPlugin,
+    TaskPoolThreadAssignmentPolicy,
+};
+
+/// A [`TaskPoolPlugin`] whose compute pool, which runs `par_iter_mut`, has exactly
+/// `compute_threads` threads (at least one), with one thread each for I/O and async compute.
+///
+/// Bevy's default gives compute only what the other pools leave, which on a two-core machine is
+/// a single thread; put this in `DefaultPlugins.set(...)` or `MinimalPlugins.set(...)` to use
+/// every core for the fluid.
+pub fn task_pool_plugin(compute_threads: usize) -> TaskPoolPlugin {
+    let threads = compute_threads.max(1);
+    let one = TaskPoolThreadAssignmentPolicy {
+        min_threads: 1,
+        max_threads: 1,
+        percent: 0.0,
+        on_thread_spawn: None,
+        on_thread_destroy: None,
+    };
+    TaskPoolPlugin {
+        task_pool_options: TaskPoolOptions {
+            min_total_threads: threads + 2,
+            max_total_threads: threads + 2,
+            io: one.clone(),
+            async_compute: one.clone(),
+            compute: TaskPoolThreadAssignmentPolicy {
+                min_threads: threads,
+                max_threads: threads,
+                percent: 1.0,
+                ..one
+            },
+        },
+    }
+}
+
+/// Every plugin of the crate. Configure one with `.set(SphPlugin::default().with_fixed_hz(120.0))`
+/// or leave one out with `.disable::<SphPlugin>()`.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct ParticlePlugins;
+
+impl PluginGroup for ParticlePlugins {
+    fn build(self) -> PluginGroupBuilder {
+        PluginGroupBuilder::start::<Self>().add(fluid::SphPlugin::default())
+    }
+}
+
+/// The types a game needs.
+pub mod prelude {
+    pub use crate::ParticlePlugins;
+    pub use crate::fluid::{
+        Acceleration, Density, FluidBlock, FluidParticle, KernelKind, Obstacle, Position, Pressure,
+        SphParams, SphParamsStatus, SphPlugin, SphStats, SphSubstep, SphSubstepSystems, SphSystems,
+        Tank, Velocity,
+    };
+}

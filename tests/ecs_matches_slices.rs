@@ -1,0 +1,76 @@
+//! The ECS path and the plain-slice solver compute the same numbers, bit for bit.
+
+mod common;
+
+use bevy::prelude::*;
+use bevy_sph2d::fluid::slices::SliceFluid;
+use bevy_sph2d::fluid::{FluidBlock, KernelKind, Obstacle, SphParams, Tank};
+use common::*;
+
+fn check(kernel: KernelKind) {
+    let params = SphParams {
+        particle_spacing: 0.01,
+        kernel,
+        tank: Some(Tank::new(0.6, 0.4)),
+        speed_of_sound: SphParams::speed_of_sound_for_height(0.2),
+        ..default()
+    };
+    let block = FluidBlock::dam_break(0.15, 0.2)
+        .with_seed(3)
+        .with_jitter(0.1);
+    let obstacle = Obstacle::circle(Vec2::new(0.35, 0.05), 0.04);
+
+    let mut app = create_app(params.clone());
+    app.world_mut().spawn(obstacle);
+    let ids = spawn(&mut app, block);
+    run(&mut app, 20);
+    let ecs = states(&mut app);
+
+    let mut fluid = SliceFluid::new(
+        params.constants().unwrap(),
+        block.positions(params.particle_spacing),
+        &[obstacle],
+    );
+    for _ in 0..20 {
+        fluid.advance(TICK);
+    }
+    assert_eq!(ecs.len(), ids.len());
+    assert!(
+        (sim_time(&app) - fluid.time).abs() < 1e-12,
+        "ecs time {} slices time {}, substeps {}",
+        sim_time(&app),
+        fluid.time,
+        fluid.substeps
+    );
+    assert!(
+        fluid.substeps > 20,
+        "sub-stepping expected, got {}",
+        fluid.substeps
+    );
+    let mut moved = 0.0f32;
+    for (i, s) in ecs.iter().enumerate() {
+        assert_eq!(s.position, fluid.position[i], "particle {i} position");
+        assert_eq!(s.velocity, fluid.velocity[i], "particle {i} velocity");
+        assert_eq!(s.density, fluid.density[i], "particle {i} density");
+        assert_eq!(s.pressure, fluid.pressure[i], "particle {i} pressure");
+        assert_eq!(
+            s.acceleration, fluid.acceleration[i],
+            "particle {i} acceleration"
+        );
+        moved = moved.max(s.velocity.length());
+    }
+    assert!(
+        moved > 0.1,
+        "the column should be collapsing, max speed {moved}"
+    );
+}
+
+#[test]
+fn ecs_matches_slices_wendland() {
+    check(KernelKind::WendlandC2);
+}
+
+#[test]
+fn ecs_matches_slices_muller() {
+    check(KernelKind::Muller);
+}
