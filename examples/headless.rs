@@ -31,8 +31,8 @@ usage: headless [options]
   --every DT                  time between frames, s (default 0.01)
   --seed N                    jitter seed (default 0)
   --out FILE.csv              output file (default headless.csv)
-  --jitter J                  spawn jitter, fraction of the spacing (default 0.01)
-  --support-ratio R           kernel support / spacing (default 2.5)
+  --jitter J                  spawn jitter, fraction of the spacing (default 0.0001)
+  --support-ratio R           kernel support / spacing (default 3)
   --kernel wendland|cubic|muller   (default wendland)
   --speed-of-sound C          m/s (default 20 sqrt(g * fluid height))
   --viscosity NU              kinematic viscosity, m^2/s (default 1e-6)
@@ -106,7 +106,7 @@ fn configure(args: &Args) -> Result<Config, String> {
     };
     let params = SphParams {
         particle_spacing: args.positive("spacing", default_spacing)?,
-        support_ratio: args.positive("support-ratio", 2.5)?,
+        support_ratio: args.positive("support-ratio", 3.0)?,
         kernel,
         speed_of_sound: args.positive(
             "speed-of-sound",

@@ -28,7 +28,7 @@ fn check(kernel: KernelKind) {
 
     let mut fluid = SliceFluid::new(
         params.constants().unwrap(),
-        block.positions(params.particle_spacing),
+        block.positions_for(&params),
         &[obstacle],
     );
     for _ in 0..20 {

@@ -40,7 +40,9 @@ pub struct SphParams {
     /// Initial particle spacing `Δx`, m. Sets particle mass and the resolution.
     pub particle_spacing: f32,
     /// Kernel support radius over particle spacing, `H/Δx` (1.5–5; 2 gives about 11 neighbours,
-    /// 2.6 about 21).
+    /// 2.6 about 21, 3 about 29). Smaller is faster but less accurate: on a square lattice the
+    /// discrete pressure gradient is 6% weak at 2, 4% at 2.6 and under 1% at 3, the default,
+    /// and hydrostatic pressure comes out high by as much.
     pub support_ratio: f32,
     /// Which kernels compute density and gradients.
     pub kernel: KernelKind,
@@ -93,7 +95,7 @@ impl SphParams {
             kinematic_viscosity: 1.0e-6,
             artificial_viscosity: 0.02,
             particle_spacing: 0.02,
-            support_ratio: 2.5,
+            support_ratio: 3.0,
             kernel: KernelKind::WendlandC2,
             gravity: Vec2::new(0.0, -STANDARD_GRAVITY),
             tank: Some(Tank::new(2.0, 1.2)),

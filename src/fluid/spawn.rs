@@ -24,12 +24,20 @@ pub struct FluidBlock {
     pub jitter: f32,
     /// Seed of the jitter: the same seed gives the same particles, bit for bit.
     pub seed: u64,
+    /// Start at hydrostatic pressure rather than at rest density: rows are packed closer with
+    /// depth, as the equation of state requires under gravity, so the block does not first
+    /// fall into its own compression and ring with pressure waves. Applies when gravity points
+    /// straight down.
+    pub hydrostatic: bool,
 }
 
 impl FluidBlock {
     /// Default jitter, as a fraction of the spacing: enough to break the lattice's symmetry,
-    /// small enough not to disturb the initial density noticeably.
-    pub const DEFAULT_JITTER: f32 = 0.01;
+    /// small enough not to disturb the initial pressure. A weakly compressible fluid turns
+    /// density noise into pressure noise of `c₀² δρ`: a jitter `j` gives about `0.3 j` relative
+    /// density noise, which with `c₀ = 20 √(g H)` is `120 j` times the hydrostatic pressure at
+    /// the bottom of a column `H` high; this default keeps it near 1%.
+    pub const DEFAULT_JITTER: f32 = 1.0e-4;
 
     /// A block filling the rectangle from `min` with `size`, m.
     pub fn new(min: Vec2, size: Vec2) -> Self {
@@ -38,6 +46,7 @@ impl FluidBlock {
             size,
             jitter: Self::DEFAULT_JITTER,
             seed: 0,
+            hydrostatic: true,
         }
     }
 
@@ -60,6 +69,12 @@ impl FluidBlock {
     /// With this seed.
     pub fn with_seed(mut self, seed: u64) -> Self {
         self.seed = seed;
+        self
+    }
+
+    /// With or without the hydrostatic start (see [`hydrostatic`](Self::hydrostatic)).
+    pub fn with_hydrostatic(mut self, hydrostatic: bool) -> Self {
+        self.hydrostatic = hydrostatic;
         self
     }
 
@@ -95,14 +110,53 @@ impl FluidBlock {
         out
     }
 
-    /// Spawns the block into `world` at the spacing of its [`SphParams`] and returns the
-    /// entities in lattice order.
+    /// Particle positions for `params`: the lattice of [`positions`](Self::positions) at the
+    /// particle spacing, with rows packed hydrostatically if [`hydrostatic`](Self::hydrostatic)
+    /// is set and gravity points down. The bottom row keeps its place; each row's spacing is
+    /// `Δx ρ₀/ρ(d)`, where `ρ(d)` is the density the Tait equation of state gives at the
+    /// hydrostatic pressure `ρ₀ g d` of the row's depth `d`.
+    pub fn positions_for(&self, params: &SphParams) -> Vec<Vec2> {
+        let spacing = params.particle_spacing;
+        let mut positions = self.positions(spacing);
+        let g = params.gravity;
+        let downward = g.y < 0.0 && g.x.abs() <= 1e-3 * g.y.abs();
+        if !(self.hydrostatic && downward && params.validate().is_ok()) {
+            return positions;
+        }
+        let (columns, rows) = self.lattice_size(spacing);
+        let stiffness = params.rest_density * params.speed_of_sound * params.speed_of_sound
+            / params.eos_exponent;
+        let row_spacing = |row: u32| {
+            let depth = (rows - row) as f32 * spacing - 0.5 * spacing;
+            let pressure = params.rest_density * -g.y * depth;
+            spacing / (1.0 + pressure / stiffness).powf(1.0 / params.eos_exponent)
+        };
+        // Shift every row down by what the rows below it gave up.
+        let mut shift = 0.0f32;
+        let mut below = row_spacing(0);
+        shift += 0.5 * (spacing - below);
+        for row in 0..rows {
+            if row > 0 {
+                let here = row_spacing(row);
+                shift += spacing - 0.5 * (below + here);
+                below = here;
+            }
+            let start = (row * columns) as usize;
+            for p in &mut positions[start..start + columns as usize] {
+                p.y -= shift;
+            }
+        }
+        positions
+    }
+
+    /// Spawns the block into `world` with the [`SphParams`] there (see
+    /// [`positions_for`](Self::positions_for)) and returns the entities in lattice order.
     pub fn spawn(&self, world: &mut World) -> Vec<Entity> {
-        let spacing = world
+        let params = world
             .get_resource::<SphParams>()
-            .map(|p| p.particle_spacing)
-            .unwrap_or_else(|| SphParams::default().particle_spacing);
-        let positions = self.positions(spacing);
+            .cloned()
+            .unwrap_or_default();
+        let positions = self.positions_for(&params);
         world
             .spawn_batch(positions.into_iter().map(|p| (FluidParticle, Position(p))))
             .collect()
@@ -146,6 +200,34 @@ mod tests {
             let d = (*p - *q).abs();
             assert!(d.x <= 0.002 + 1e-6 && d.y <= 0.002 + 1e-6);
         }
+    }
+
+    #[test]
+    fn hydrostatic_rows_pack_with_depth() {
+        let params = SphParams {
+            particle_spacing: 0.01,
+            ..SphParams::default()
+        };
+        let block = FluidBlock::dam_break(0.05, 0.5).with_jitter(0.0);
+        let flat = block.with_hydrostatic(false).positions_for(&params);
+        let packed = block.positions_for(&params);
+        assert_eq!(flat, block.positions(0.01));
+        assert_eq!(flat.len(), packed.len());
+        let row_y = |p: &[Vec2], row: usize| p[row * 5].y;
+        // The bottom row sits half a (packed) row above the floor, the rows get closer with
+        // depth, and the top sinks by about the mean compression.
+        assert!(row_y(&packed, 0) < 0.005 && row_y(&packed, 0) > 0.0049);
+        let gap = |row: usize| row_y(&packed, row + 1) - row_y(&packed, row);
+        assert!(gap(0) < gap(25) && gap(25) < gap(48));
+        assert!(gap(48) < 0.01 && gap(0) > 0.0099 * (1.0 - 0.02));
+        let sink = row_y(&flat, 49) - row_y(&packed, 49);
+        // Mean pressure ρ₀ g H/2 over B = ρ₀c²/γ, divided by γ again for the strain.
+        let c = params.speed_of_sound;
+        let expected = 0.5 * 9.81 * 0.5 * 0.5 / (c * c);
+        assert!(
+            (sink / expected - 1.0).abs() < 0.1,
+            "sank {sink} m, expected {expected} m"
+        );
     }
 
     #[test]

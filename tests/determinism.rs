@@ -1,0 +1,145 @@
+//! Same seed, same run: bit for bit, across repeated runs, across thread counts (through the
+//! ECS and on plain slices), and different for a different seed.
+
+mod common;
+
+use bevy::prelude::*;
+use bevy_sph2d::fluid::slices::SliceFluid;
+use bevy_sph2d::fluid::{FluidBlock, Obstacle, SphParams, Tank};
+use common::*;
+use std::process::Command;
+
+fn params() -> SphParams {
+    SphParams {
+        particle_spacing: 0.01,
+        tank: Some(Tank::new(0.6, 0.4)),
+        speed_of_sound: SphParams::speed_of_sound_for_height(0.25),
+        ..default()
+    }
+}
+
+fn block(seed: u64) -> FluidBlock {
+    FluidBlock::dam_break(0.2, 0.25)
+        .with_jitter(0.05)
+        .with_seed(seed)
+}
+
+/// A fingerprint of every bit of the final state.
+fn fingerprint(states: &[State]) -> u64 {
+    use std::hash::{DefaultHasher, Hash, Hasher};
+    let mut hasher = DefaultHasher::new();
+    for s in states {
+        for v in [
+            s.position.x,
+            s.position.y,
+            s.velocity.x,
+            s.velocity.y,
+            s.acceleration.x,
+            s.acceleration.y,
+            s.density,
+            s.pressure,
+        ] {
+            v.to_bits().hash(&mut hasher);
+        }
+    }
+    hasher.finish()
+}
+
+fn run_ecs(seed: u64, app: &mut App) -> u64 {
+    app.world_mut()
+        .spawn(Obstacle::circle(Vec2::new(0.4, 0.05), 0.05));
+    spawn(app, block(seed));
+    run(app, 25);
+    fingerprint(&states(app))
+}
+
+#[test]
+fn same_seed_same_run() {
+    let a = run_ecs(1, &mut create_app(params()));
+    let b = run_ecs(1, &mut create_app(params()));
+    let c = run_ecs(2, &mut create_app(params()));
+    assert_eq!(a, b, "two runs with the same seed differ");
+    assert_ne!(a, c, "a different seed should give a different run");
+}
+
+/// Run by [`ecs_is_deterministic_across_thread_counts`] in a child process (Bevy's compute pool
+/// is global, so each thread count needs a process of its own); prints the fingerprint.
+#[test]
+#[ignore = "helper, run by ecs_is_deterministic_across_thread_counts"]
+fn fingerprint_with_threads_from_env() {
+    let threads: usize = std::env::var("SPH_TEST_THREADS")
+        .expect("SPH_TEST_THREADS")
+        .parse()
+        .expect("a thread count");
+    let mut app = App::new();
+    app.add_plugins((
+        MinimalPlugins.set(bevy_sph2d::task_pool_plugin(threads)),
+        bevy_sph2d::fluid::SphPlugin::default().with_params(params()),
+    ))
+    .insert_resource(Time::<Fixed>::from_duration(
+        std::time::Duration::from_secs_f64(TICK),
+    ))
+    .insert_resource(bevy::time::TimeUpdateStrategy::FixedTimesteps(1));
+    let actual = bevy::tasks::ComputeTaskPool::get().thread_num();
+    println!("fingerprint={} threads={actual}", run_ecs(1, &mut app));
+}
+
+#[test]
+fn ecs_is_deterministic_across_thread_counts() {
+    let exe = std::env::current_exe().expect("test binary");
+    let fingerprints: Vec<(String, String)> = [1, 2, 4]
+        .iter()
+        .map(|threads| {
+            let out = Command::new(&exe)
+                .args([
+                    "fingerprint_with_threads_from_env",
+                    "--exact",
+                    "--ignored",
+                    "--nocapture",
+                ])
+                .env("SPH_TEST_THREADS", threads.to_string())
+                .output()
+                .expect("run the helper");
+            let stdout = String::from_utf8_lossy(&out.stdout);
+            assert!(out.status.success(), "helper failed: {stdout}");
+            let line = stdout
+                .lines()
+                .find(|l| l.starts_with("fingerprint="))
+                .unwrap_or_else(|| panic!("no fingerprint in: {stdout}"));
+            let mut parts = line.split_whitespace();
+            let print = parts.next().unwrap().to_string();
+            let used = parts.next().unwrap().to_string();
+            assert_eq!(used, format!("threads={threads}"));
+            (print, used)
+        })
+        .collect();
+    assert!(
+        fingerprints.windows(2).all(|w| w[0].0 == w[1].0),
+        "results depend on the thread count: {fingerprints:?}"
+    );
+    // And they equal the in-process run, whatever its pool.
+    let here = run_ecs(1, &mut create_app(params()));
+    assert_eq!(fingerprints[0].0, format!("fingerprint={here}"));
+}
+
+#[test]
+fn slices_are_deterministic_across_thread_counts() {
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            let p = params();
+            let mut fluid =
+                SliceFluid::new(p.constants().unwrap(), block(1).positions_for(&p), &[]);
+            for _ in 0..25 {
+                fluid.advance(TICK);
+            }
+            (fluid.position, fluid.velocity, fluid.density)
+        })
+    };
+    let one = run(1);
+    assert_eq!(one, run(2));
+    assert_eq!(one, run(5));
+}

@@ -1,0 +1,226 @@
+//! Physical checks of the fluid through the ECS, headless: hydrostatics of a resting layer, a
+//! dam break against Martin & Moyce (1952), and momentum conservation.
+
+mod common;
+
+use bevy::prelude::*;
+use bevy_sph2d::fluid::{FluidBlock, SphParams, Tank};
+use bevy_sph2d::prelude::*;
+use common::*;
+
+const G: f32 = 9.81;
+
+#[test]
+fn resting_layer_settles_to_hydrostatic_pressure() {
+    let depth = 0.2;
+    let spacing = 0.01;
+    let tank = Tank::new(0.4, 0.3);
+    let params = SphParams {
+        particle_spacing: spacing,
+        speed_of_sound: SphParams::speed_of_sound_for_height(depth),
+        tank: Some(tank),
+        ..default()
+    };
+    let mut app = create_app(params);
+    let ids = spawn(
+        &mut app,
+        FluidBlock::resting_layer(&tank, depth).with_seed(2),
+    );
+    assert_eq!(ids.len(), 40 * 20);
+
+    // Settle for 1.5 s, then average pressure over the next 0.5 s (30 ticks), which spans
+    // several periods of the layer's acoustic ringing.
+    run(&mut app, 90);
+    let mut mean_pressure = vec![0.0f64; ids.len()];
+    let mut last = Vec::new();
+    for _ in 0..30 {
+        run(&mut app, 1);
+        last = states(&mut app);
+        for (sum, s) in mean_pressure.iter_mut().zip(&last) {
+            *sum += s.pressure as f64 / 30.0;
+        }
+    }
+    assert!(all_finite(&last));
+    let surface = last.iter().map(|s| s.position.y).fold(0.0, f32::max);
+    assert!(
+        (surface - depth).abs() < 2.0 * spacing,
+        "surface at {surface} m, filled to {depth} m"
+    );
+
+    // At rest: the fastest particle moves at under 3% of the gravity-wave speed √(gD).
+    let max_speed = last.iter().map(|s| s.velocity.length()).fold(0.0, f32::max);
+    assert!(
+        max_speed < 0.03 * (G * depth).sqrt(),
+        "still moving at {max_speed} m/s"
+    );
+
+    // Density within 2% of rest below the free-surface layer.
+    let interior: Vec<usize> = (0..last.len())
+        .filter(|&i| last[i].position.y < surface - 3.0 * spacing)
+        .collect();
+    assert!(interior.len() > 500);
+    for &i in &interior {
+        let error = (last[i].density / 1000.0 - 1.0).abs();
+        assert!(error < 0.02, "particle {i}: density {}", last[i].density);
+    }
+
+    // Pressure grows linearly with depth at ρ₀g (least-squares fit over the interior).
+    let points: Vec<(f64, f64)> = interior
+        .iter()
+        .map(|&i| ((surface - last[i].position.y) as f64, mean_pressure[i]))
+        .collect();
+    let n = points.len() as f64;
+    let (sx, sy) = points
+        .iter()
+        .fold((0.0, 0.0), |(a, b), (x, y)| (a + x, b + y));
+    let (mx, my) = (sx / n, sy / n);
+    let sxx: f64 = points.iter().map(|(x, _)| (x - mx) * (x - mx)).sum();
+    let sxy: f64 = points.iter().map(|(x, y)| (x - mx) * (y - my)).sum();
+    let syy: f64 = points.iter().map(|(_, y)| (y - my) * (y - my)).sum();
+    let slope = sxy / sxx;
+    let r2 = sxy * sxy / (sxx * syy);
+    let hydrostatic = 1000.0 * G as f64;
+    assert!(
+        (slope / hydrostatic - 1.0).abs() < 0.08,
+        "dp/dd = {slope:.0} Pa/m, ρ₀g = {hydrostatic:.0} Pa/m"
+    );
+    assert!(r2 > 0.97, "pressure is not linear in depth: R² = {r2}");
+    let intercept = my - slope * mx;
+    assert!(
+        intercept.abs() < 0.05 * hydrostatic * depth as f64,
+        "pressure at the surface {intercept:.0} Pa"
+    );
+}
+
+/// Martin & Moyce (1952), Phil. Trans. R. Soc. A 244, fig. 3, n² = 2, a = 2.25 in:
+/// dimensionless time `t √(2g/a)` and surge front position `Z/a`.
+const MARTIN_MOYCE: [(f32, f32); 8] = [
+    (0.832, 1.217),
+    (1.219, 1.474),
+    (1.997, 2.292),
+    (2.547, 2.995),
+    (3.345, 4.134),
+    (4.034, 4.944),
+    (4.418, 5.881),
+    (5.091, 6.980),
+];
+
+#[test]
+fn dam_break_front_follows_martin_and_moyce() {
+    let a = 0.05;
+    let spacing = a / 20.0;
+    let params = SphParams {
+        particle_spacing: spacing,
+        speed_of_sound: SphParams::speed_of_sound_for_height(2.0 * a),
+        tank: Some(Tank::new(10.0 * a, 3.0 * a)),
+        ..default()
+    };
+    let mut app = create_app(params.clone());
+    let ids = spawn(&mut app, FluidBlock::dam_break(a, 2.0 * a).with_seed(7));
+    assert_eq!(ids.len(), 20 * 40);
+    let time_scale = (2.0 * G / a).sqrt(); // t* = t √(2g/a)
+
+    let tank = params.tank.unwrap();
+    let mut front = 0.0f32;
+    let mut history = Vec::new();
+    while sim_time(&app) as f32 * time_scale < 5.2 {
+        run(&mut app, 1);
+        let s = states(&mut app);
+        assert!(all_finite(&s), "non-finite state at t = {}", sim_time(&app));
+        for p in &s {
+            assert!(
+                p.position.x >= 0.0
+                    && p.position.x <= tank.width
+                    && p.position.y >= 0.0
+                    && p.position.y <= tank.height,
+                "particle left the tank: {}",
+                p.position
+            );
+        }
+        // The surge front: the farthest particle along the floor.
+        let now = s.iter().map(|p| p.position.x).fold(0.0, f32::max);
+        assert!(
+            now >= front - 0.1 * spacing,
+            "front moved back from {front} to {now} at t = {}",
+            sim_time(&app)
+        );
+        front = front.max(now);
+        history.push((sim_time(&app) as f32 * time_scale, now / a));
+    }
+    // Compare with the experiment, interpolating our front at each measured time. SPH runs a
+    // little ahead early on (the experiment's gate took time to clear), so allow -10%..+25%.
+    for (t_star, z_exp) in MARTIN_MOYCE {
+        let z = interpolate(&history, t_star);
+        let ratio = z / z_exp;
+        assert!(
+            (0.9..=1.25).contains(&ratio),
+            "at t√(2g/a) = {t_star}: front at {z:.2} a, experiment {z_exp} a"
+        );
+    }
+}
+
+fn interpolate(history: &[(f32, f32)], t: f32) -> f32 {
+    let k = history
+        .iter()
+        .position(|&(ti, _)| ti >= t)
+        .expect("ran long enough");
+    if k == 0 {
+        return history[0].1;
+    }
+    let ((t0, z0), (t1, z1)) = (history[k - 1], history[k]);
+    z0 + (z1 - z0) * (t - t0) / (t1 - t0)
+}
+
+#[test]
+fn momentum_is_conserved_without_gravity_or_walls() {
+    let params = SphParams {
+        particle_spacing: 0.01,
+        gravity: Vec2::ZERO,
+        tank: None,
+        artificial_viscosity: 0.1,
+        kinematic_viscosity: 1.0e-3,
+        speed_of_sound: 10.0,
+        ..default()
+    };
+    let mut app = create_app(params.clone());
+    let ids = spawn(
+        &mut app,
+        FluidBlock::new(Vec2::new(-0.1, 0.2), Vec2::new(0.2, 0.15))
+            .with_jitter(0.2)
+            .with_seed(9),
+    );
+    // A converging, shearing flow plus a drift, so pressure and both viscosities all act.
+    let centre = Vec2::new(0.0, 0.275);
+    for (k, &entity) in ids.iter().enumerate() {
+        let mut e = app.world_mut().entity_mut(entity);
+        let d = e.get::<Position>().unwrap().0 - centre;
+        let squeeze = Vec2::new(-d.x * 6.0, -d.y * 3.0 + d.x * 4.0);
+        let wobble = Vec2::new((k as f32 * 0.37).sin(), (k as f32 * 0.71).cos()) * 0.05;
+        e.get_mut::<Velocity>().unwrap().0 = squeeze + wobble + Vec2::new(0.3, -0.1);
+    }
+    let momentum = |app: &mut App| {
+        states(app)
+            .iter()
+            .fold(bevy::math::DVec2::ZERO, |m, s| m + s.velocity.as_dvec2())
+    };
+    let scale: f64 = states(&mut app)
+        .iter()
+        .map(|s| s.velocity.length() as f64)
+        .sum();
+    let before = momentum(&mut app);
+    let mut strongest = 0.0f32;
+    for _ in 0..12 {
+        run(&mut app, 1);
+        let s = states(&mut app);
+        assert!(all_finite(&s));
+        strongest = s
+            .iter()
+            .map(|p| p.acceleration.length())
+            .fold(strongest, f32::max);
+    }
+    let after = momentum(&mut app);
+    assert!(strongest > 50.0, "forces should act, max |a| = {strongest}");
+    // Every pair force is equal and opposite: the total changes only by rounding.
+    let drift = (after - before).length() / scale;
+    assert!(drift < 1.0e-5, "momentum drifted by {drift:e} of Σ|v|");
+}
