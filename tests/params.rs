@@ -24,7 +24,8 @@ fn invalid_changes_are_refused_and_the_last_valid_ones_kept() {
     run(&mut app, 3);
     let good = *app.world().resource::<SphSolver>().constants();
 
-    let breakages: [(&str, fn(&mut SphParams)); 5] = [
+    type Breakage = fn(&mut SphParams);
+    let breakages: [(&str, Breakage); 5] = [
         ("particle_spacing", |p| p.particle_spacing = -0.01),
         ("speed_of_sound", |p| p.speed_of_sound = f32::NAN),
         ("support_ratio", |p| p.support_ratio = 0.5),

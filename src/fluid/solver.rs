@@ -435,6 +435,12 @@ impl NeighborList {
     pub fn slots(&self) -> Option<&[u32]> {
         self.slots.get(..self.len as usize)
     }
+
+    /// The slots padded to whole lane batches with the snapshot's padding slot (a far point).
+    fn padded_slots(&self) -> Option<&[u32]> {
+        self.slots
+            .get(..(self.len as usize).checked_next_multiple_of(LANES)?)
+    }
 }
 
 /// [`density_at`], also recording the fluid neighbours inside the support (in candidate order)
@@ -472,6 +478,8 @@ pub fn density_and_neighbors_at<K: RadialKernel>(
         .points
         .for_each_batch(x, |_, _, _, r2| sum += kernel.value_sq_x4(r2));
     list.len = if len <= NEIGHBOR_LIST_CAPACITY {
+        // Pad the last lane batch with the padding slot after the last particle (far away).
+        list.slots[len..len + LANES].fill(fluid.len() as u32);
         len as u32
     } else {
         u32::MAX
@@ -606,14 +614,11 @@ pub fn acceleration_at<K: RadialKernel>(
 ) -> Vec2 {
     let pair = PairTerms::new(c, v, rho, p);
     let mut sum = (Vec4::ZERO, Vec4::ZERO);
-    match list.slots() {
+    match list.padded_slots() {
         Some(slots) => {
-            // Pad the last batch with the padding slot after the last particle (far away).
-            let padding = fluid.len() as u32;
-            for batch in slots.chunks(LANES) {
-                let mut lanes = [padding; LANES];
-                lanes[..batch.len()].copy_from_slice(batch);
-                let ([px, py], neighbor) = fluid.gather(lanes.map(|j| j as usize));
+            for batch in slots.chunks_exact(LANES) {
+                let lanes = [0, 1, 2, 3].map(|lane| batch[lane] as usize);
+                let ([px, py], neighbor) = fluid.gather(lanes);
                 let (dx, dy) = (px - Vec4::splat(x.x), py - Vec4::splat(x.y));
                 pair.accumulate(kernel, dx, dy, neighbor, &mut sum);
             }
@@ -757,3 +762,5 @@ pub fn plan_substep(remaining: f64, stable: f32) -> f32 {
     let count = (remaining / stable).ceil().max(1.0);
     (remaining / count) as f32
 }
+
+
