@@ -762,5 +762,3 @@ pub fn plan_substep(remaining: f64, stable: f32) -> f32 {
     let count = (remaining / stable).ceil().max(1.0);
     (remaining / count) as f32
 }
-
-
