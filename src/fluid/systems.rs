@@ -19,10 +19,14 @@ use bevy::prelude::*;
 use bevy::tasks::{ComputeTaskPool, ParallelSliceMut};
 use core::sync::atomic::{AtomicU32, Ordering};
 
+/// Smallest amount of per-particle work worth a task of its own: below it, waking a thread
+/// costs more than it saves.
+const MIN_PARALLEL_CHUNK: usize = 1024;
+
 /// Several batches per thread even out the uneven cost of particles (a free-surface particle
 /// has half the neighbours of an interior one).
 const BATCHING: BatchingStrategy = BatchingStrategy {
-    batch_size_limits: 256..usize::MAX,
+    batch_size_limits: MIN_PARALLEL_CHUNK..usize::MAX,
     batches_per_thread: 4,
 };
 
@@ -352,18 +356,24 @@ pub(crate) fn compute_wall_pressure(mut solver: ResMut<SphSolver>) {
         return;
     }
     let pool = ComputeTaskPool::get();
+    // Chunks big enough that spawning them costs less than the work in them.
     let chunk = solver
         .walls
         .len()
         .div_ceil(4 * pool.thread_num().max(1))
-        .max(64);
+        .max(MIN_PARALLEL_CHUNK);
     with_kernels!(c.kernel, c.support, |w, _g| {
         solver.walls.update_pressure(|mut states, points| {
-            states.par_chunk_map_mut(pool, chunk, |index, states| {
+            let update = |index: usize, states: &mut [_]| {
                 for (k, state) in states.iter_mut().enumerate() {
                     *state = wall_state_at(&w, &c, points.get(index * chunk + k), fluid);
                 }
-            });
+            };
+            if states.len() <= chunk {
+                update(0, states);
+            } else {
+                states.par_chunk_map_mut(pool, chunk, update);
+            }
         });
     });
 }
