@@ -25,6 +25,8 @@
 //! [`fluid::boundary`]) have no ECS in them and can be used on their own;
 //! [`fluid::slices::SliceFluid`] runs the whole solver on plain vectors.
 
+#![warn(missing_docs)]
+
 pub mod fluid;
 
 use bevy::app::{

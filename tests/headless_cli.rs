@@ -52,6 +52,13 @@ fn bad_arguments_print_usage_and_fail() {
 }
 
 #[test]
+fn help_prints_usage_and_succeeds() {
+    let out = run(&["--help"]);
+    assert_eq!(out.status.code(), Some(0));
+    assert!(String::from_utf8_lossy(&out.stdout).contains("usage: headless"));
+}
+
+#[test]
 fn dam_break_writes_csv_frames() {
     let file = out_file("dam");
     let out = run(&[

@@ -23,7 +23,7 @@ impl Args {
                 return Err(format!("unexpected argument '{arg}'"));
             };
             if name == "help" {
-                return Err(String::new());
+                return Err(HELP.to_string());
             }
             if flags.contains(&name) {
                 seen_flags.push(name.to_string());
@@ -73,11 +73,17 @@ impl Args {
     }
 }
 
-/// Prints `error` (if any) and `usage` to stderr and exits with status 2.
+/// What [`Args::parse`] returns for `--help`.
+const HELP: &str = "help";
+
+/// Prints the usage and exits: with status 0 for `--help`, otherwise with `error` on stderr and
+/// status 2.
 pub fn fail(error: &str, usage: &str) -> ! {
-    if !error.is_empty() {
-        eprintln!("error: {error}\n");
+    if error == HELP {
+        println!("{usage}");
+        std::process::exit(0);
     }
+    eprintln!("error: {error}\n");
     eprintln!("{usage}");
     std::process::exit(2);
 }
