@@ -27,8 +27,26 @@ fn run(args: &[&str]) -> Output {
         .expect("run the recorder")
 }
 
-fn out_file(name: &str) -> PathBuf {
-    std::env::temp_dir().join(format!("bevy_sph2d_{}_{name}.csv", std::process::id()))
+/// Runs the recorder with `args` plus `--out` a temporary file, and returns the CSV header and
+/// the parsed rows.
+fn record(name: &str, args: &[&str]) -> (String, Vec<Vec<f64>>) {
+    let file = std::env::temp_dir().join(format!("bevy_sph2d_{}_{name}.csv", std::process::id()));
+    let mut args = args.to_vec();
+    args.extend(["--out", file.to_str().unwrap()]);
+    let out = run(&args);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let csv = std::fs::read_to_string(&file).unwrap();
+    let _ = std::fs::remove_file(&file);
+    let mut lines = csv.lines();
+    let header = lines.next().unwrap_or_default().to_string();
+    let rows = lines
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    (header, rows)
 }
 
 #[test]
@@ -60,44 +78,30 @@ fn help_prints_usage_and_succeeds() {
 
 #[test]
 fn dam_break_writes_csv_frames() {
-    let file = out_file("dam");
-    let out = run(&[
-        "--scenario",
-        "dam-break",
-        "--column-width",
-        "0.1",
-        "--column-height",
-        "0.1",
-        "--tank-width",
-        "0.3",
-        "--tank-height",
-        "0.2",
-        "--spacing",
-        "0.01",
-        "--duration",
-        "0.05",
-        "--every",
-        "0.025",
-        "--seed",
-        "3",
-        "--out",
-        file.to_str().unwrap(),
-    ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    let (header, rows) = record(
+        "dam",
+        &[
+            "--scenario",
+            "dam-break",
+            "--column-width",
+            "0.1",
+            "--column-height",
+            "0.1",
+            "--tank-width",
+            "0.3",
+            "--tank-height",
+            "0.2",
+            "--spacing",
+            "0.01",
+            "--duration",
+            "0.05",
+            "--every",
+            "0.025",
+            "--seed",
+            "3",
+        ],
     );
-    let csv = std::fs::read_to_string(&file).unwrap();
-    let _ = std::fs::remove_file(&file);
-    let mut lines = csv.lines();
-    assert_eq!(
-        lines.next(),
-        Some("time,id,x,y,vx,vy,ax,ay,mass,density,pressure")
-    );
-    let rows: Vec<Vec<f64>> = lines
-        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
-        .collect();
+    assert_eq!(header, "time,id,x,y,vx,vy,ax,ay,mass,density,pressure");
     assert_eq!(rows.len(), 3 * 100, "three frames of 10 x 10 particles");
     let times: Vec<f64> = rows.iter().map(|r| r[0]).collect();
     assert_eq!(times[0], 0.0);
@@ -117,37 +121,25 @@ fn dam_break_writes_csv_frames() {
 
 #[test]
 fn tank_scenario_writes_hydrostatic_pressure() {
-    let file = out_file("tank");
-    let out = run(&[
-        "--scenario",
+    let (_, rows) = record(
         "tank",
-        "--tank-width",
-        "0.2",
-        "--tank-height",
-        "0.2",
-        "--depth",
-        "0.1",
-        "--spacing",
-        "0.01",
-        "--duration",
-        "0",
-        "--jitter",
-        "0",
-        "--out",
-        file.to_str().unwrap(),
-    ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+        &[
+            "--scenario",
+            "tank",
+            "--tank-width",
+            "0.2",
+            "--tank-height",
+            "0.2",
+            "--depth",
+            "0.1",
+            "--spacing",
+            "0.01",
+            "--duration",
+            "0",
+            "--jitter",
+            "0",
+        ],
     );
-    let csv = std::fs::read_to_string(&file).unwrap();
-    let _ = std::fs::remove_file(&file);
-    let rows: Vec<Vec<f64>> = csv
-        .lines()
-        .skip(1)
-        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
-        .collect();
     assert_eq!(rows.len(), 20 * 10);
     // At t = 0 the layer starts hydrostatic: away from the walls (whose particles sit on the
     // uncompressed lattice) and the free surface, pressure is ρ₀ g d at depth d.

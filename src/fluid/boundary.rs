@@ -76,29 +76,24 @@ impl Tank {
     /// outward part of the velocity is reflected with `restitution` (0 = stops, 1 = bounces).
     #[inline]
     pub fn confine(&self, position: &mut Vec2, velocity: &mut Vec2, restitution: f32) {
-        let max = self.size();
-        if position.x < 0.0 {
-            position.x = 0.0;
-            if velocity.x < 0.0 {
-                velocity.x *= -restitution;
-            }
-        } else if position.x > max.x {
-            position.x = max.x;
-            if velocity.x > 0.0 {
-                velocity.x *= -restitution;
-            }
-        }
-        if position.y < 0.0 {
-            position.y = 0.0;
-            if velocity.y < 0.0 {
-                velocity.y *= -restitution;
-            }
-        } else if position.y > max.y {
-            position.y = max.y;
-            if velocity.y > 0.0 {
-                velocity.y *= -restitution;
-            }
-        }
+        confine_axis(&mut position.x, &mut velocity.x, self.width, restitution);
+        confine_axis(&mut position.y, &mut velocity.y, self.height, restitution);
+    }
+}
+
+/// [`Tank::confine`] along one axis, between 0 and `max`.
+#[inline]
+fn confine_axis(position: &mut f32, velocity: &mut f32, max: f32, restitution: f32) {
+    let (limit, outward) = if *position < 0.0 {
+        (0.0, -1.0)
+    } else if *position > max {
+        (max, 1.0)
+    } else {
+        return;
+    };
+    *position = limit;
+    if *velocity * outward > 0.0 {
+        *velocity *= -restitution;
     }
 }
 
