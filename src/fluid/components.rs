@@ -57,12 +57,27 @@ pub struct Density(pub f32);
 #[reflect(Component, Default, Debug, PartialEq)]
 pub struct Pressure(pub f32);
 
-/// Where the particle sits in the solver's cell-sorted neighbour snapshot this sub-step. Written
-/// by [`SphSubstepSystems::Neighbors`](crate::fluid::SphSubstepSystems::Neighbors); games can
-/// ignore it.
-#[derive(Component, Reflect, Debug, Clone, Copy, Default, PartialEq, Eq)]
+/// Where the particle sits in the solver's cell-sorted neighbour snapshot, and in which
+/// snapshot: written by [`SphSubstepSystems::Neighbors`](crate::fluid::SphSubstepSystems::Neighbors)
+/// each sub-step, so a slot is only trusted in the snapshot generation it was given in.
+/// Games can ignore it.
+#[derive(Component, Reflect, Debug, Clone, Copy, PartialEq, Eq)]
 #[reflect(Component, Default, Debug, PartialEq)]
-pub struct NeighborSlot(pub u32);
+pub struct NeighborSlot {
+    /// Sorted slot in the snapshot.
+    pub slot: u32,
+    /// The snapshot generation the slot belongs to (0: none yet).
+    pub generation: u32,
+}
+
+impl Default for NeighborSlot {
+    fn default() -> Self {
+        Self {
+            slot: u32::MAX,
+            generation: 0,
+        }
+    }
+}
 
 /// The particle's fluid neighbours this sub-step (slots in the solver's snapshot), found while
 /// summing density and reused by the force pass. Solver scratch; games can ignore it.

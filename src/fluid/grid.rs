@@ -14,6 +14,7 @@
 //!
 //! See [`SphPlugin`](crate::fluid::SphPlugin).
 
+use super::parallel::{Parallel, Sequential, chunk_size};
 use bevy::math::Vec2;
 use core::ops::Range;
 
@@ -22,10 +23,15 @@ use core::ops::Range;
 pub struct NeighborGrid {
     cell_size: f32,
     inv_cell_size: f32,
+    /// Corner of the padded grid: one empty cell outside the points' window on every side, so a
+    /// query's 3×3 block never needs clipping.
     origin: Vec2,
+    /// Cells across and up the window, padding excluded.
     columns: i32,
     rows: i32,
-    /// `cell_start[c]..cell_start[c + 1]` are the sorted slots of cell `c` (row-major).
+    /// Cells per row of storage, `columns + 2`.
+    stride: i32,
+    /// `cell_start[c]..cell_start[c + 1]` are the sorted slots of padded cell `c` (row-major).
     cell_start: Vec<u32>,
     /// Cell of each input point.
     cell_of: Vec<u32>,
@@ -58,10 +64,14 @@ impl NeighborGrid {
         self.cell_size
     }
 
-    /// The largest number of cells a grid over `points` points may allocate.
+    /// The largest number of cells [`rebuild`](Self::rebuild) allocates for `points` points.
     pub fn max_cells(points: usize) -> usize {
         4 * points + 4096
     }
+
+    /// Cells a grid of fixed points may take with
+    /// [`rebuild_with_budget`](Self::rebuild_with_budget): 4M cells, 16 MiB.
+    pub const STATIC_BUDGET: usize = 1 << 22;
 
     /// Number of points binned at the last rebuild.
     pub fn len(&self) -> usize {
@@ -84,8 +94,21 @@ impl NeighborGrid {
     }
 
     /// Bins `points` into cells and sorts them by cell (stable: points of one cell keep their
-    /// input order). O(n + cells).
+    /// input order). O(n + cells), with at most [`max_cells`](Self::max_cells) cells.
     pub fn rebuild(&mut self, points: &[Vec2]) {
+        self.rebuild_with_budget(points, Self::max_cells(points.len()));
+    }
+
+    /// [`rebuild`](Self::rebuild) allowing up to `max_cells` cells. Points spread thinly (wall
+    /// particles round a whole tank) need a budget for the area they span rather than their
+    /// number, or far-apart points crowd into the window's edge cells and slow queries down.
+    pub fn rebuild_with_budget(&mut self, points: &[Vec2], max_cells: usize) {
+        self.rebuild_with(points, max_cells, &Sequential);
+    }
+
+    /// [`rebuild_with_budget`](Self::rebuild_with_budget), binning points into cells on
+    /// `parallel` (the counting sort itself is sequential).
+    pub fn rebuild_with(&mut self, points: &[Vec2], max_cells: usize, parallel: &impl Parallel) {
         self.block_occupied.clear();
         let n = points.len();
         if n == 0 {
@@ -94,26 +117,40 @@ impl NeighborGrid {
             self.cell_of.clear();
             self.columns = 0;
             self.rows = 0;
+            self.stride = 2;
             self.cell_start.clear();
             self.cell_start.push(0);
             return;
         }
-        self.place_window(points);
+        self.place_window(points, max_cells.max(Self::max_cells(n)));
 
-        let cells = (self.columns * self.rows) as usize;
+        let cells = (self.stride * (self.rows + 2)) as usize;
         self.cell_start.clear();
         self.cell_start.resize(cells + 1, 0);
         self.cell_of.resize(n, 0);
-        let (origin, inv, columns, rows) =
-            (self.origin, self.inv_cell_size, self.columns, self.rows);
-        for (cell, &p) in self.cell_of.iter_mut().zip(points) {
-            let c = (p - origin) * inv;
-            // Points are at or right of the origin except where the window clamps them, so
-            // truncation (saturating, NaN to 0) serves as floor.
-            let cx = (c.x as i32).clamp(0, columns - 1);
-            let cy = (c.y as i32).clamp(0, rows - 1);
-            *cell = (cy * columns + cx) as u32;
-        }
+        let (origin, inv, columns, rows, stride) = (
+            self.origin,
+            self.inv_cell_size,
+            self.columns,
+            self.rows,
+            self.stride,
+        );
+        let chunk = chunk_size(n, 16, 8192);
+        let mut pieces: Vec<_> = self
+            .cell_of
+            .chunks_mut(chunk)
+            .zip(points.chunks(chunk))
+            .collect();
+        parallel.for_each(&mut pieces, |(cells, points)| {
+            for (cell, &p) in cells.iter_mut().zip(points.iter()) {
+                let c = (p - origin) * inv;
+                // Points lie right of the padding column except where the window clamps
+                // them, so truncation (saturating, NaN to 0) serves as floor.
+                let cx = (c.x as i32).clamp(1, columns);
+                let cy = (c.y as i32).clamp(1, rows);
+                *cell = (cy * stride + cx) as u32;
+            }
+        });
         for &cell in &self.cell_of {
             self.cell_start[cell as usize + 1] += 1;
         }
@@ -136,32 +173,39 @@ impl NeighborGrid {
     }
 
     /// Chooses origin and extent: the bounding box of the points, or a window of at most
-    /// [`max_cells`](Self::max_cells) around their centroid.
-    fn place_window(&mut self, points: &[Vec2]) {
+    /// `budget` cells around their centroid.
+    fn place_window(&mut self, points: &[Vec2], budget: usize) {
         let mut lo = Vec2::splat(f32::INFINITY);
         let mut hi = Vec2::splat(f32::NEG_INFINITY);
-        let mut sum = bevy::math::DVec2::ZERO;
-        let mut counted = 0usize;
         for &p in points {
-            if p.is_finite() {
-                lo = lo.min(p);
-                hi = hi.max(p);
-                sum += p.as_dvec2();
-                counted += 1;
+            // min/max skip NaN; infinities are dropped below.
+            lo = lo.min(p);
+            hi = hi.max(p);
+        }
+        if !(lo.is_finite() && hi.is_finite()) {
+            // Rare: some point is infinite (or all are NaN). Fall back to the finite ones.
+            (lo, hi) = points.iter().filter(|p| p.is_finite()).fold(
+                (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY)),
+                |(lo, hi), &p| (lo.min(p), hi.max(p)),
+            );
+            if !(lo.is_finite() && hi.is_finite()) {
+                (lo, hi) = (Vec2::ZERO, Vec2::ZERO);
             }
         }
-        if counted == 0 {
-            lo = Vec2::ZERO;
-            hi = Vec2::ZERO;
-        }
         let extent = ((hi - lo) * self.inv_cell_size).floor();
-        let mut columns = (extent.x as f64 + 1.0).min(i32::MAX as f64 / 4.0) as i64;
-        let mut rows = (extent.y as f64 + 1.0).min(i32::MAX as f64 / 4.0) as i64;
+        let mut columns = (extent.x as f64 + 1.0).min(i32::MAX as f64 / 8.0) as i64;
+        let mut rows = (extent.y as f64 + 1.0).min(i32::MAX as f64 / 8.0) as i64;
         let mut origin = lo;
-        let budget = Self::max_cells(points.len()) as i64;
+        let budget = budget as i64;
         if columns * rows > budget {
             // Too sparse for a dense grid: keep a window around the centroid, shrinking the
             // longer side first so thin clouds keep their shape.
+            let (sum, counted) = points
+                .iter()
+                .filter(|p| p.is_finite())
+                .fold((bevy::math::DVec2::ZERO, 0usize), |(s, n), p| {
+                    (s + p.as_dvec2(), n + 1)
+                });
             let centre = (sum / counted.max(1) as f64).as_vec2();
             while columns * rows > budget {
                 if columns >= rows {
@@ -174,26 +218,27 @@ impl NeighborGrid {
             let fits = size.cmpge(hi - lo);
             origin = Vec2::select(fits, lo, centre - 0.5 * size);
         }
-        self.origin = origin;
+        self.origin = origin - Vec2::splat(self.cell_size);
         self.columns = columns as i32;
         self.rows = rows as i32;
+        self.stride = self.columns + 2;
     }
 
     /// Records which cells have a point in their 3×3 block, so that queries in empty regions
     /// return after one look-up. Worth it for grids queried far more often than they are rebuilt
     /// (the walls); cleared by the next [`rebuild`](Self::rebuild).
     pub fn mark_occupied_blocks(&mut self) {
-        let (columns, rows) = (self.columns, self.rows);
-        self.block_occupied = vec![false; (columns * rows).max(0) as usize];
-        for y in 0..rows {
-            for x in 0..columns {
-                let cell = (y * columns + x) as usize;
+        let (stride, rows) = (self.stride, self.rows + 2);
+        self.block_occupied = vec![false; self.cell_start.len().saturating_sub(1)];
+        for y in 1..rows - 1 {
+            for x in 1..stride - 1 {
+                let cell = (y * stride + x) as usize;
                 if self.cell_start[cell] == self.cell_start[cell + 1] {
                     continue;
                 }
-                for by in (y - 1).max(0)..=(y + 1).min(rows - 1) {
-                    for bx in (x - 1).max(0)..=(x + 1).min(columns - 1) {
-                        self.block_occupied[(by * columns + bx) as usize] = true;
+                for by in y - 1..=y + 1 {
+                    for bx in x - 1..=x + 1 {
+                        self.block_occupied[(by * stride + bx) as usize] = true;
                     }
                 }
             }
@@ -209,29 +254,19 @@ impl NeighborGrid {
             return;
         }
         let c = (p - self.origin) * self.inv_cell_size;
-        // A query may sit one cell outside the grid: points clamped into a border cell are then
-        // still within reach (see the module docs), and nothing farther can be a neighbour.
-        // Truncating instead of flooring moves a query left of (or below) the origin one cell
-        // inwards, which only widens the block it visits.
-        let cx = (c.x as i32).clamp(-1, self.columns);
-        let cy = (c.y as i32).clamp(-1, self.rows);
-        if !self.block_occupied.is_empty() {
-            let cell = cy.clamp(0, self.rows - 1) * self.columns + cx.clamp(0, self.columns - 1);
-            if !self.block_occupied[cell as usize] {
-                return;
-            }
-        }
-        let x0 = (cx - 1).max(0);
-        let x1 = (cx + 1).min(self.columns - 1);
-        if x0 > x1 {
+        // A query outside the window is clamped to its edge: points clamped into an edge cell
+        // are then still within reach (see the module docs), and nothing farther can be a
+        // neighbour. (Truncation instead of floor only moves a query left of the padding into
+        // the same edge cell.)
+        let cx = (c.x as i32).clamp(1, self.columns);
+        let cy = (c.y as i32).clamp(1, self.rows);
+        let centre = cy * self.stride + cx;
+        if !self.block_occupied.is_empty() && !self.block_occupied[centre as usize] {
             return;
         }
-        let y0 = (cy - 1).max(0);
-        let y1 = (cy + 1).min(self.rows - 1);
-        for y in y0..=y1 {
-            let row = y * self.columns;
-            let start = self.cell_start[(row + x0) as usize] as usize;
-            let end = self.cell_start[(row + x1 + 1) as usize] as usize;
+        for row in [centre - self.stride, centre, centre + self.stride] {
+            let start = self.cell_start[(row - 1) as usize] as usize;
+            let end = self.cell_start[(row + 2) as usize] as usize;
             if start < end {
                 visit(start..end);
             }
@@ -389,6 +424,10 @@ mod tests {
         let mut grid = NeighborGrid::new(0.02);
         grid.rebuild(&points);
         assert!(grid.columns as usize * grid.rows as usize <= NeighborGrid::max_cells(503));
+        assert_eq!(
+            grid.cell_start.len() as i32,
+            grid.stride * (grid.rows + 2) + 1
+        );
         check_all(&points, 0.02, &[Vec2::new(1.0e6, -3.0e5 + 0.015)]);
     }
 

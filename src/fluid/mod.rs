@@ -4,6 +4,7 @@ pub mod boundary;
 pub mod components;
 pub mod grid;
 pub mod kernels;
+pub mod parallel;
 pub mod params;
 pub mod slices;
 pub mod solver;
@@ -155,11 +156,7 @@ impl Plugin for SphPlugin {
         );
         substep.add_systems((
             systems::build_neighbor_grid.in_set(SphSubstepSystems::Neighbors),
-            (
-                systems::compute_density,
-                systems::share_density,
-                systems::compute_wall_pressure,
-            )
+            (systems::compute_density, systems::compute_wall_pressure)
                 .chain()
                 .in_set(SphSubstepSystems::Density),
             systems::compute_forces.in_set(SphSubstepSystems::Forces),

@@ -6,6 +6,7 @@
 //! See [`SphPlugin`](crate::fluid::SphPlugin) for the ECS version.
 
 use super::boundary::Obstacle;
+use super::parallel::Rayon;
 use super::solver::{
     FluidSnapshot, NeighborList, SphConstants, Walls, acceleration_at, advance_particle,
     density_and_neighbors_at, mean_neighbors, plan_substep, pressure_from_density,
@@ -122,22 +123,25 @@ impl SliceFluid {
     /// stable step if `last`), and returns it, s.
     pub fn substep(&mut self, remaining: f64, last: bool) -> f32 {
         let c = self.constants;
-        self.snapshot.rebuild(&c, &self.position, &self.velocity);
+        self.snapshot
+            .rebuild(&c, &self.position, &self.velocity, &Rayon);
         with_kernels!(c.kernel, c.support, |w, g| {
             let (snapshot, walls) = (&self.snapshot, &self.walls);
+            let slots = snapshot.grid().slot_of();
             (
                 &mut self.density,
                 &mut self.pressure,
                 &mut self.neighbors,
                 &self.position,
+                slots,
             )
                 .into_par_iter()
                 .with_min_len(MIN_PARTICLES_PER_TASK)
-                .for_each(|(rho, p, list, x)| {
+                .for_each(|(rho, p, list, x, &slot)| {
                     *rho = density_and_neighbors_at(&w, &c, *x, snapshot, walls, list);
                     *p = pressure_from_density(&c, *rho);
+                    snapshot.set_pressure(slot as usize, *rho, *p);
                 });
-            self.snapshot.fill_pressure(&self.density, &self.pressure);
             let fluid = &self.snapshot;
             self.walls.update_pressure(|states, points| {
                 states

@@ -19,7 +19,9 @@
 use super::boundary::{Obstacle, Tank};
 use super::grid::NeighborGrid;
 use super::kernels::{KernelKind, RadialKernel};
+use super::parallel::{Parallel, chunk_size};
 use bevy::math::{Mat4, Vec2, Vec4};
+use core::sync::atomic::{AtomicU64, Ordering};
 
 /// Everything the sub-step maths needs, derived once from validated
 /// [`SphParams`](crate::fluid::SphParams) by
@@ -114,11 +116,12 @@ pub struct SortedPoints {
 }
 
 impl SortedPoints {
-    /// Rebuilds the cell list over `points` (input order) with cells of `cell_size` and copies
-    /// the points into sorted order.
-    pub fn rebuild(&mut self, cell_size: f32, points: &[Vec2]) {
+    /// Rebuilds the cell list over `points` (input order) with cells of `cell_size` and at most
+    /// `max_cells` cells (see [`NeighborGrid::rebuild_with_budget`]), and copies the points into
+    /// sorted order.
+    pub fn rebuild(&mut self, cell_size: f32, points: &[Vec2], max_cells: usize) {
         self.grid.set_cell_size(cell_size);
-        self.grid.rebuild(points);
+        self.grid.rebuild_with_budget(points, max_cells);
         let n = points.len();
         self.x.resize(n + LANES, FAR);
         self.y.resize(n + LANES, FAR);
@@ -228,9 +231,53 @@ impl NeighborData {
     }
 }
 
-/// One fluid particle as its neighbours read it: `[x, y, vx, vy, ρ, p/ρ², 0, 0]` (m, m/s,
-/// kg/m³, Pa·m⁶/kg²), 32 bytes, so a neighbour gathers with two vector loads.
-pub type NeighborRecord = [f32; 8];
+/// Density and `p/ρ²` of every fluid particle by sorted slot, one atomic word each, so that the
+/// density pass, running in parallel over particles in any order, can store each particle's
+/// values at its slot while nothing else writes there. Relaxed atomic loads and stores compile
+/// to plain moves.
+#[derive(Debug, Default)]
+pub struct PressureSlots(Vec<AtomicU64>);
+
+impl Clone for PressureSlots {
+    fn clone(&self) -> Self {
+        Self(
+            self.0
+                .iter()
+                .map(|v| AtomicU64::new(v.load(Ordering::Relaxed)))
+                .collect(),
+        )
+    }
+}
+
+impl PressureSlots {
+    /// Stores density (kg/m³) and pressure (Pa) at `slot`; a non-positive density counts as no
+    /// pressure.
+    #[inline]
+    pub fn set(&self, slot: usize, density: f32, pressure: f32) {
+        let term = if density > 0.0 {
+            pressure / (density * density)
+        } else {
+            0.0
+        };
+        self.0[slot].store(pack(density, term), Ordering::Relaxed);
+    }
+
+    /// Density (kg/m³) and `p/ρ²` at `slot`.
+    #[inline]
+    pub fn get(&self, slot: usize) -> (f32, f32) {
+        let word = self.0[slot].load(Ordering::Relaxed);
+        (
+            f32::from_bits(word as u32),
+            f32::from_bits((word >> 32) as u32),
+        )
+    }
+}
+
+/// Two `f32` in one `u64`, the first in the low half.
+#[inline]
+fn pack(low: f32, high: f32) -> u64 {
+    u64::from(low.to_bits()) | (u64::from(high.to_bits()) << 32)
+}
 
 /// A cell-sorted copy of the fluid particles for neighbour reads: positions and velocities
 /// from the start of the sub-step, then densities and pressures once they are known.
@@ -238,29 +285,73 @@ pub type NeighborRecord = [f32; 8];
 pub struct FluidSnapshot {
     /// Positions and cell list (for scanning candidates).
     pub points: SortedPoints,
-    /// Everything a neighbour contributes, per sorted slot, padded with [`LANES`] far records.
-    pub records: Vec<NeighborRecord>,
+    /// `[x, y, vx, vy]` per sorted slot (m, m/s), padded with [`LANES`] far entries: a
+    /// neighbour's kinematics in one vector load.
+    pub kinematics: Vec<[f32; 4]>,
+    /// Density and pressure term per sorted slot, padded like `kinematics`.
+    pub pressure: PressureSlots,
     /// Largest speed in the snapshot, m/s.
     pub max_speed: f32,
 }
 
 impl FluidSnapshot {
     /// Rebuilds the grid over `positions` (input order) and copies positions and velocities into
-    /// sorted order; densities are left at rest until [`set_pressure`](Self::set_pressure).
-    pub fn rebuild(&mut self, c: &SphConstants, positions: &[Vec2], velocities: &[Vec2]) {
+    /// sorted order, in parallel chunks on `parallel`; densities are left at rest until
+    /// [`set_pressure`](Self::set_pressure).
+    pub fn rebuild(
+        &mut self,
+        c: &SphConstants,
+        positions: &[Vec2],
+        velocities: &[Vec2],
+        parallel: &impl Parallel,
+    ) {
         debug_assert_eq!(positions.len(), velocities.len());
-        self.points.rebuild(c.support, positions);
         let n = positions.len();
-        let far = [FAR, FAR, 0.0, 0.0, c.rest_density, 0.0, 0.0, 0.0];
-        self.records.resize(n + LANES, far);
-        let mut max_speed_sq = 0.0f32;
-        for (record, &i) in self.records.iter_mut().zip(self.points.grid.order()) {
-            let (x, v) = (positions[i as usize], velocities[i as usize]);
-            *record = [x.x, x.y, v.x, v.y, c.rest_density, 0.0, 0.0, 0.0];
-            max_speed_sq = max_speed_sq.max(v.length_squared());
-        }
-        self.records[n..].fill(far);
+        let points = &mut self.points;
+        points.grid.set_cell_size(c.support);
+        points
+            .grid
+            .rebuild_with(positions, NeighborGrid::max_cells(n), parallel);
+        let far = [FAR, FAR, 0.0, 0.0];
+        let at_rest = pack(c.rest_density, 0.0);
+        points.x.resize(n + LANES, FAR);
+        points.y.resize(n + LANES, FAR);
+        self.kinematics.resize(n + LANES, far);
+        self.pressure
+            .0
+            .resize_with(n + LANES, || AtomicU64::new(at_rest));
+        let chunk = chunk_size(n, 16, 4096);
+        let order = points.grid.order();
+        let mut pieces: Vec<_> = order
+            .chunks(chunk)
+            .zip(points.x.chunks_mut(chunk))
+            .zip(points.y.chunks_mut(chunk))
+            .zip(self.kinematics.chunks_mut(chunk))
+            .zip(self.pressure.0.chunks(chunk))
+            .map(|((((order, x), y), kinematics), pressure)| {
+                (order, x, y, kinematics, pressure, 0.0f32)
+            })
+            .collect();
+        parallel.for_each(
+            &mut pieces,
+            |(order, xs, ys, kinematics, pressure, max_speed_sq)| {
+                for (k, &i) in order.iter().enumerate() {
+                    let (p, v) = (positions[i as usize], velocities[i as usize]);
+                    (xs[k], ys[k]) = (p.x, p.y);
+                    kinematics[k] = [p.x, p.y, v.x, v.y];
+                    pressure[k].store(at_rest, Ordering::Relaxed);
+                    *max_speed_sq = max_speed_sq.max(v.length_squared());
+                }
+            },
+        );
+        let max_speed_sq = pieces.iter().fold(0.0f32, |m, piece| m.max(piece.5));
         self.max_speed = max_speed_sq.sqrt();
+        points.x[n..].fill(FAR);
+        points.y[n..].fill(FAR);
+        self.kinematics[n..].fill(far);
+        for padding in &self.pressure.0[n..] {
+            padding.store(at_rest, Ordering::Relaxed);
+        }
     }
 
     /// The cell list.
@@ -278,46 +369,31 @@ impl FluidSnapshot {
         self.points.is_empty()
     }
 
-    /// Records densities and pressures given in input order (the order of the positions passed
-    /// to [`rebuild`](Self::rebuild)).
-    pub fn fill_pressure(&mut self, density: &[f32], pressure: &[f32]) {
-        for (record, &i) in self.records.iter_mut().zip(self.points.grid.order()) {
-            set_pressure_term(record, density[i as usize], pressure[i as usize]);
-        }
-    }
-
     /// Records density (kg/m³) and pressure (Pa) of the particle at sorted `slot`; a
-    /// non-positive density counts as no pressure.
+    /// non-positive density counts as no pressure. Takes `&self`: particles store their own
+    /// slots from a parallel loop.
     #[inline]
-    pub fn set_pressure(&mut self, slot: usize, density: f32, pressure: f32) {
-        set_pressure_term(&mut self.records[slot], density, pressure);
+    pub fn set_pressure(&self, slot: usize, density: f32, pressure: f32) {
+        self.pressure.set(slot, density, pressure);
     }
 
     /// Positions `[x, y]` and `[vx, vy, ρ, p/ρ²]` of the particles at four sorted slots, as
     /// lanes.
     #[inline(always)]
     fn gather(&self, slots: [usize; LANES]) -> ([Vec4; 2], [Vec4; 4]) {
-        let [a, b, c, d] = slots.map(|j| &self.records[j]);
-        let low = |r: &NeighborRecord| Vec4::from_slice(&r[..4]);
-        let high = |r: &NeighborRecord| Vec4::from_slice(&r[4..]);
-        let first = Mat4::from_cols(low(a), low(b), low(c), low(d)).transpose();
-        let second = Mat4::from_cols(high(a), high(b), high(c), high(d)).transpose();
+        let [a, b, c, d] = slots.map(|j| Vec4::from_array(self.kinematics[j]));
+        let m = Mat4::from_cols(a, b, c, d).transpose();
+        let [pa, pb, pc, pd] = slots.map(|j| self.pressure.get(j));
         (
-            [first.x_axis, first.y_axis],
-            [first.z_axis, first.w_axis, second.x_axis, second.y_axis],
+            [m.x_axis, m.y_axis],
+            [
+                m.z_axis,
+                m.w_axis,
+                Vec4::new(pa.0, pb.0, pc.0, pd.0),
+                Vec4::new(pa.1, pb.1, pc.1, pd.1),
+            ],
         )
     }
-}
-
-/// Stores density and `p/ρ²` in a record (a non-positive density counts as no pressure).
-#[inline]
-fn set_pressure_term(record: &mut NeighborRecord, density: f32, pressure: f32) {
-    record[4] = density;
-    record[5] = if density > 0.0 {
-        pressure / (density * density)
-    } else {
-        0.0
-    };
 }
 
 /// Fixed boundary particles of the tank and obstacles, cell-sorted, with the pressure the fluid
@@ -358,7 +434,9 @@ impl Walls {
             .copied()
             .filter(Obstacle::is_valid)
             .collect();
-        self.points.rebuild(c.support, &points);
+        // Wall particles outline the whole tank: budget cells for its area, not their number.
+        self.points
+            .rebuild(c.support, &points, NeighborGrid::STATIC_BUDGET);
         // Most fluid particles are far from every wall; let their wall queries end at once.
         self.points.grid.mark_occupied_blocks();
         self.data.reset(points.len(), c.rest_density);

@@ -7,6 +7,7 @@ use super::boundary::Obstacle;
 use super::components::{
     Acceleration, Density, FluidParticle, NeighborSlot, Neighbors, Position, Pressure, Velocity,
 };
+use super::parallel::Parallel;
 use super::params::{SphParams, SphParamsError};
 use super::solver::{
     FluidSnapshot, SphConstants, Walls, acceleration_at, advance_particle,
@@ -27,8 +28,26 @@ const MIN_PARALLEL_CHUNK: usize = 1024;
 /// has half the neighbours of an interior one).
 const BATCHING: BatchingStrategy = BatchingStrategy {
     batch_size_limits: MIN_PARALLEL_CHUNK..usize::MAX,
-    batches_per_thread: 4,
+    batches_per_thread: 8,
 };
+
+/// [`Parallel`] on Bevy's compute task pool (a single chunk runs inline).
+struct ComputePool;
+
+impl Parallel for ComputePool {
+    fn for_each<T: Send, F: Fn(&mut T) + Sync>(&self, items: &mut [T], work: F) {
+        if items.len() <= 1 {
+            items.iter_mut().for_each(work);
+            return;
+        }
+        let work = &work;
+        ComputeTaskPool::get().scope(|scope| {
+            for item in items {
+                scope.spawn(async move { work(item) });
+            }
+        });
+    }
+}
 
 /// The solver's working state: derived constants, the neighbour snapshot, the wall particles
 /// and the sub-step clock. Read it for diagnostics; the systems own it.
@@ -41,6 +60,8 @@ pub struct SphSolver {
     gathered_position: Vec<Vec2>,
     gathered_velocity: Vec<Vec2>,
     clock: SubstepClock,
+    /// Counts snapshot rebuilds; [`NeighborSlot`]s carry the one they were assigned in.
+    generation: u32,
     non_finite: u64,
 }
 
@@ -64,6 +85,7 @@ impl SphSolver {
             gathered_position: Vec::new(),
             gathered_velocity: Vec::new(),
             clock: SubstepClock::default(),
+            generation: 0,
             non_finite: 0,
         }
     }
@@ -250,7 +272,6 @@ pub fn refresh_fluid_state(world: &mut World) {
         world.run_system_cached(rebuild_walls),
         world.run_system_cached(build_neighbor_grid),
         world.run_system_cached(compute_density),
-        world.run_system_cached(share_density),
         world.run_system_cached(compute_wall_pressure),
         world.run_system_cached(compute_forces),
     ];
@@ -285,31 +306,75 @@ pub(crate) fn build_neighbor_grid(
     mut particles: Query<(&Position, &Velocity, &mut NeighborSlot), With<FluidParticle>>,
 ) {
     let solver = &mut *solver;
-    solver.gathered_position.clear();
-    solver.gathered_velocity.clear();
-    for (position, velocity, _) in &particles {
-        solver.gathered_position.push(position.0);
-        solver.gathered_velocity.push(velocity.0);
+    let (positions, velocities) = (&mut solver.gathered_position, &mut solver.gathered_velocity);
+    positions.clear();
+    velocities.clear();
+    // Whole table columns at a time where the storage allows (it always does for the
+    // required components); item by item otherwise. Both visit entities in the same order.
+    match particles.contiguous_iter() {
+        Ok(tables) => {
+            for (p, v, _) in tables {
+                positions.extend(p.iter().map(|p| p.0));
+                velocities.extend(v.iter().map(|v| v.0));
+            }
+        }
+        Err(_) => {
+            for (p, v, _) in &particles {
+                positions.push(p.0);
+                velocities.push(v.0);
+            }
+        }
     }
     solver.snapshot.rebuild(
         &solver.constants,
         &solver.gathered_position,
         &solver.gathered_velocity,
+        &ComputePool,
     );
     // Same query, same system, no structural change in between: the same order as above.
-    for ((_, _, mut slot), &s) in particles.iter_mut().zip(solver.snapshot.grid().slot_of()) {
-        slot.0 = s;
+    // Generation 0 marks particles that never had a slot.
+    solver.generation = solver.generation.wrapping_add(1).max(1);
+    let generation = solver.generation;
+    let mut slots = solver.snapshot.grid().slot_of();
+    match particles.contiguous_iter_mut() {
+        Ok(tables) => {
+            for (_, _, mut table) in tables {
+                let (here, rest) = slots.split_at(table.len());
+                for (slot, &s) in table.iter_mut().zip(here) {
+                    *slot = NeighborSlot {
+                        slot: s,
+                        generation,
+                    };
+                }
+                slots = rest;
+            }
+        }
+        Err(_) => {
+            for ((_, _, mut slot), &s) in particles.iter_mut().zip(slots) {
+                *slot = NeighborSlot {
+                    slot: s,
+                    generation,
+                };
+            }
+        }
     }
 }
 
+/// What the density pass reads and writes per particle.
+type DensityData = (
+    &'static Position,
+    &'static NeighborSlot,
+    &'static mut Density,
+    &'static mut Pressure,
+    &'static mut Neighbors,
+);
+
 /// [`SphSubstepSystems::Density`](super::SphSubstepSystems::Density): summed density and the
-/// equation of state, per particle in parallel.
+/// equation of state, per particle in parallel; each particle also stores its density and
+/// pressure at its slot of the snapshot, for its neighbours' force pass.
 pub(crate) fn compute_density(
     solver: Res<SphSolver>,
-    mut particles: Query<
-        (&Position, &mut Density, &mut Pressure, &mut Neighbors),
-        With<FluidParticle>,
-    >,
+    mut particles: Query<DensityData, With<FluidParticle>>,
 ) {
     let solver = &*solver;
     let c = solver.constants;
@@ -317,34 +382,26 @@ pub(crate) fn compute_density(
         particles
             .par_iter_mut()
             .batching_strategy(BATCHING)
-            .for_each(|(position, mut density, mut pressure, mut neighbors)| {
-                let rho = density_and_neighbors_at(
-                    &w,
-                    &c,
-                    position.0,
-                    &solver.snapshot,
-                    &solver.walls,
-                    &mut neighbors.0,
-                );
-                density.0 = rho;
-                pressure.0 = pressure_from_density(&c, rho);
-            });
+            .for_each(
+                |(position, slot, mut density, mut pressure, mut neighbors)| {
+                    let rho = density_and_neighbors_at(
+                        &w,
+                        &c,
+                        position.0,
+                        &solver.snapshot,
+                        &solver.walls,
+                        &mut neighbors.0,
+                    );
+                    let p = pressure_from_density(&c, rho);
+                    density.0 = rho;
+                    pressure.0 = p;
+                    // A particle spawned since the snapshot was built has no slot in it.
+                    if slot.generation == solver.generation {
+                        solver.snapshot.set_pressure(slot.slot as usize, rho, p);
+                    }
+                },
+            );
     });
-}
-
-/// Copies densities and pressures into the snapshot for the neighbour reads of the force stage.
-pub(crate) fn share_density(
-    mut solver: ResMut<SphSolver>,
-    particles: Query<(&NeighborSlot, &Density, &Pressure), With<FluidParticle>>,
-) {
-    let snapshot = &mut solver.snapshot;
-    let n = snapshot.len();
-    for (slot, density, pressure) in &particles {
-        let slot = slot.0 as usize;
-        if slot < n && density.0 > 0.0 {
-            snapshot.set_pressure(slot, density.0, pressure.0);
-        }
-    }
 }
 
 /// Extrapolates the fluid's pressure onto the wall particles, in parallel chunks.
