@@ -31,6 +31,8 @@ pub struct NeighborGrid {
     rows: i32,
     /// Cells per row of storage, `columns + 2`.
     stride: i32,
+    /// Whether the window is smaller than the points' bounding box (some points clamped).
+    windowed: bool,
     /// `cell_start[c]..cell_start[c + 1]` are the sorted slots of padded cell `c` (row-major).
     cell_start: Vec<u32>,
     /// Cell of each input point.
@@ -197,7 +199,8 @@ impl NeighborGrid {
         let mut rows = (extent.y as f64 + 1.0).min(i32::MAX as f64 / 8.0) as i64;
         let mut origin = lo;
         let budget = budget as i64;
-        if columns * rows > budget {
+        self.windowed = columns * rows > budget;
+        if self.windowed {
             // Too sparse for a dense grid: keep a window around the centroid, shrinking the
             // longer side first so thin clouds keep their shape.
             let (sum, counted) = points
@@ -254,7 +257,15 @@ impl NeighborGrid {
             return;
         }
         let c = (p - self.origin) * self.inv_cell_size;
-        // A query outside the window is clamped to its edge: points clamped into an edge cell
+        let outside_padding = !(c.x >= 0.0
+            && c.y >= 0.0
+            && c.x < (self.columns + 2) as f32
+            && c.y < (self.rows + 2) as f32);
+        if outside_padding && !self.windowed {
+            // More than a cell from every point: no neighbours (NaN lands here too).
+            return;
+        }
+        // A query outside a window is clamped to its edge: points clamped into an edge cell
         // are then still within reach (see the module docs), and nothing farther can be a
         // neighbour. (Truncation instead of floor only moves a query left of the padding into
         // the same edge cell.)
