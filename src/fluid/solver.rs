@@ -11,7 +11,8 @@
 //!   pair by pair, with Monaghan's artificial viscosity `Πᵢⱼ` and the Lo & Shao (2002) laminar
 //!   viscosity term for a kinematic viscosity `ν`;
 //! - walls as fixed boundary particles whose pressure is extrapolated from the fluid with the
-//!   hydrostatic correction of Adami, Hu & Adams (2012);
+//!   hydrostatic correction of Adami, Hu & Adams (2012); they take part in pressure and laminar
+//!   viscosity, not in the artificial viscosity (which would act as wall friction);
 //! - symplectic Euler sub-steps bounded by the CFL, force and viscous limits.
 //!
 //! See [`SphPlugin`](crate::fluid::SphPlugin).
