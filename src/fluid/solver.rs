@@ -465,24 +465,6 @@ impl Walls {
     }
 }
 
-/// Summed density at `x`: fluid particles (the one at `x` itself included) and wall particles.
-/// Sums run lane by lane in a fixed order, so the result does not depend on threads.
-#[inline]
-pub fn density_at<K: RadialKernel>(
-    kernel: &K,
-    c: &SphConstants,
-    x: Vec2,
-    fluid: &FluidSnapshot,
-    walls: &Walls,
-) -> f32 {
-    let mut sum = Vec4::ZERO;
-    for points in [&fluid.points, &walls.points] {
-        // No branch on the support: the kernels are zero beyond it.
-        points.for_each_batch(x, |_, _, _, r2| sum += kernel.value_sq_x4(r2));
-    }
-    c.mass * sum.element_sum()
-}
-
 /// Most fluid neighbours a [`NeighborList`] holds; a particle with more (a support ratio above
 /// about 3.5, or a strongly compressed fluid) is evaluated straight from the grid instead.
 pub const NEIGHBOR_LIST_CAPACITY: usize = 48;
@@ -522,8 +504,9 @@ impl NeighborList {
     }
 }
 
-/// [`density_at`], also recording the fluid neighbours inside the support (in candidate order)
-/// in `list`.
+/// Summed density at `x` (kg/m³): fluid particles (the one at `x` itself included) and wall
+/// particles, summed lane by lane in a fixed order so the result does not depend on threads.
+/// Also records the fluid neighbours inside the support, in candidate order, in `list`.
 #[inline]
 pub fn density_and_neighbors_at<K: RadialKernel>(
     kernel: &K,
@@ -538,6 +521,7 @@ pub fn density_and_neighbors_at<K: RadialKernel>(
     let mut sum = Vec4::ZERO;
     let mut len = 0usize;
     fluid.points.for_each_batch(x, |start, _, _, r2| {
+        // No branch on the support: the kernels are zero beyond it.
         sum += kernel.value_sq_x4(r2);
         let inside = (r2.cmplt(support_sq) & r2.cmpgt(tiny)).bitmask() as usize;
         // Write all four slots, the inside ones first, and advance by how many are inside.

@@ -207,9 +207,7 @@ pub(crate) fn apply_params(
                 || old.spacing != constants.spacing
                 || old.support != constants.support
                 || old.wall_layers != constants.wall_layers;
-            if old != constants {
-                solver.constants = constants;
-            }
+            solver.constants = constants;
             if geometry_changed {
                 solver.walls_dirty = true;
             }
