@@ -27,7 +27,16 @@
 
 #![warn(missing_docs)]
 
+pub mod control;
+#[cfg(feature = "egui")]
+pub mod demo;
 pub mod fluid;
+#[cfg(feature = "render")]
+pub mod interact;
+#[cfg(feature = "egui")]
+pub mod panel;
+#[cfg(feature = "render")]
+pub mod render;
 
 use bevy::app::{
     PluginGroup, PluginGroupBuilder, TaskPoolOptions, TaskPoolPlugin,
@@ -65,8 +74,10 @@ pub fn task_pool_plugin(compute_threads: usize) -> TaskPoolPlugin {
     }
 }
 
-/// Every plugin of the crate. Configure one with `.set(SphPlugin::default().with_fixed_hz(120.0))`
-/// or leave one out with `.disable::<SphPlugin>()`.
+/// The simulation plugins of the crate: they run headless (with `MinimalPlugins`) as well as in
+/// a game. Configure one with `.set(SphPlugin::default().with_fixed_hz(120.0))` or leave one out
+/// with `.disable::<SphPlugin>()`. For sprites, mouse tools and the panel add
+/// [`ParticleUiPlugins`] too.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct ParticlePlugins;
 
@@ -76,12 +87,41 @@ impl PluginGroup for ParticlePlugins {
     }
 }
 
+/// The plugins that need a window (features `render` and `egui`): sprites
+/// ([`render::SphRenderPlugin`]), mouse and keyboard tools ([`interact::SphInteractPlugin`])
+/// and the tweak panel ([`panel::SphPanelPlugin`], feature `egui`). Add them after
+/// `DefaultPlugins` and [`ParticlePlugins`], and spawn a [`render::SphCamera`].
+#[cfg(feature = "render")]
+#[derive(Debug, Clone, Copy, Default)]
+pub struct ParticleUiPlugins;
+
+#[cfg(feature = "render")]
+impl PluginGroup for ParticleUiPlugins {
+    fn build(self) -> PluginGroupBuilder {
+        let group = PluginGroupBuilder::start::<Self>()
+            .add(render::SphRenderPlugin)
+            .add(interact::SphInteractPlugin);
+        #[cfg(feature = "egui")]
+        let group = group.add(panel::SphPanelPlugin);
+        group
+    }
+}
+
 /// The types a game needs.
 pub mod prelude {
     pub use crate::ParticlePlugins;
+    #[cfg(feature = "render")]
+    pub use crate::ParticleUiPlugins;
+    pub use crate::control::{ResetSimulation, SimulationControl};
     pub use crate::fluid::{
         Acceleration, Density, FluidBlock, FluidParticle, KernelKind, Obstacle, Position, Pressure,
-        SphParams, SphParamsStatus, SphPlugin, SphStats, SphSubstep, SphSubstepSystems, SphSystems,
-        Tank, Velocity,
+        ScenarioKind, SphParams, SphParamsStatus, SphPlugin, SphScenario, SphStats, SphSubstep,
+        SphSubstepSystems, SphSystems, Tank, Velocity,
     };
+    #[cfg(feature = "render")]
+    pub use crate::interact::{PointerSettings, PointerTool, SphInteractPlugin};
+    #[cfg(feature = "egui")]
+    pub use crate::panel::SphPanelPlugin;
+    #[cfg(feature = "render")]
+    pub use crate::render::{ColorMap, ParticleView, RenderMode, SphCamera, SphRenderPlugin};
 }

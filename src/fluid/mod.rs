@@ -6,6 +6,7 @@ pub mod grid;
 pub mod kernels;
 pub mod parallel;
 pub mod params;
+pub mod scenario;
 pub mod slices;
 pub mod solver;
 pub mod spawn;
@@ -15,12 +16,15 @@ use bevy::ecs::intern::Interned;
 use bevy::ecs::schedule::{ScheduleLabel, SingleThreadedExecutor};
 use bevy::prelude::*;
 
+use crate::control::{SimulationControlPlugin, SimulationControlSystems, simulation_running};
+
 pub use boundary::{Obstacle, Tank};
 pub use components::{
     Acceleration, Density, FluidParticle, NeighborSlot, Neighbors, Position, Pressure, Velocity,
 };
 pub use kernels::KernelKind;
 pub use params::{SphParams, SphParamsError};
+pub use scenario::{ScenarioKind, SphScenario};
 pub use spawn::FluidBlock;
 pub use systems::{SphParamsStatus, SphSolver, SphStats, SubstepClock, refresh_fluid_state};
 
@@ -32,8 +36,11 @@ pub use systems::{SphParamsStatus, SphSolver, SphStats, SubstepClock, refresh_fl
 ///
 /// # Schedule
 /// In the plugin's schedule, in order ([`SphSystems`]):
-/// 1. [`SphSystems::Prepare`]: validate changed [`SphParams`], re-sample walls and obstacles.
-/// 2. [`SphSystems::Simulate`]: split the tick into stable sub-steps and run the [`SphSubstep`]
+/// 1. [`SphSystems::Prepare`]: respawn the [`SphScenario`] on
+///    [`ResetSimulation`](crate::control::ResetSimulation), validate changed [`SphParams`],
+///    re-sample walls and obstacles.
+/// 2. [`SphSystems::Simulate`] (skipped while
+///    [`SimulationControl`](crate::control::SimulationControl) pauses): split the tick into stable sub-steps and run the [`SphSubstep`]
 ///    schedule once per sub-step. In it, in order ([`SphSubstepSystems`]):
 ///    1. [`SphSubstepSystems::Neighbors`]: rebuild the cell grid and the sorted snapshot.
 ///    2. [`SphSubstepSystems::Density`]: density and pressure (`par_iter_mut`), wall pressure.
@@ -127,7 +134,13 @@ impl Plugin for SphPlugin {
         if let Some(hz) = self.fixed_hz {
             app.insert_resource(Time::<Fixed>::from_hz(hz));
         }
+        if !app.is_plugin_added::<SimulationControlPlugin>() {
+            app.add_plugins(SimulationControlPlugin {
+                schedule: self.schedule,
+            });
+        }
         app.register_type::<SphParams>()
+            .register_type::<SphScenario>()
             .register_type::<SphStats>()
             .register_type::<FluidParticle>()
             .register_type::<Position>()
@@ -173,19 +186,23 @@ impl Plugin for SphPlugin {
                 SphSystems::Simulate,
                 SphSystems::Finish,
             )
-                .chain(),
+                .chain()
+                .after(SimulationControlSystems),
         )
         .add_systems(
             self.schedule,
             (
                 (
+                    scenario::reset_scenario,
                     systems::apply_params,
                     systems::reject_invalid_particles,
                     systems::rebuild_walls,
                 )
                     .chain()
                     .in_set(SphSystems::Prepare),
-                systems::run_substeps.in_set(SphSystems::Simulate),
+                systems::run_substeps
+                    .run_if(simulation_running)
+                    .in_set(SphSystems::Simulate),
                 systems::update_stats.in_set(SphSystems::Finish),
             ),
         );

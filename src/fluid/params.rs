@@ -32,6 +32,11 @@ pub struct SphParams {
     pub speed_of_sound: f32,
     /// Exponent `γ` of the Tait equation of state (7 for water; 1 gives a linear law).
     pub eos_exponent: f32,
+    /// Background pressure `p_b`, Pa, added to the equation of state: 0 for a liquid, whose
+    /// free surface sits at zero pressure; a positive value pushes particles apart everywhere,
+    /// so the fluid expands to fill its container like a gas (`p_b = ρ₀c₀²/γ` with `γ = 1`
+    /// gives the isothermal ideal gas `p = c₀²ρ`).
+    pub background_pressure: f32,
     /// Kinematic viscosity `ν`, m²/s (water: 1.0e-6; honey about 5e-3).
     pub kinematic_viscosity: f32,
     /// Monaghan's artificial viscosity `α`, dimensionless (0.01–0.1): damps the acoustic noise of
@@ -92,6 +97,7 @@ impl SphParams {
             rest_density: 1000.0,
             speed_of_sound: Self::speed_of_sound_for_height(1.0),
             eos_exponent: 7.0,
+            background_pressure: 0.0,
             kinematic_viscosity: 1.0e-6,
             artificial_viscosity: 0.02,
             particle_spacing: 0.02,
@@ -102,6 +108,35 @@ impl SphParams {
             cfl_number: 0.4,
             max_substeps: 400,
             wall_restitution: 0.0,
+        }
+    }
+
+    /// Honey (about 4 Pa·s at room temperature: `ν = 2.8e-3` m²/s, `ρ₀ = 1420` kg/m³) in the
+    /// same tank as [`water`](Self::water). The viscous time-step limit `⅛h²/ν` is far below the
+    /// acoustic one, so honey costs many more sub-steps per second than water.
+    pub fn honey() -> Self {
+        Self {
+            rest_density: 1420.0,
+            kinematic_viscosity: 2.8e-3,
+            ..Self::water()
+        }
+    }
+
+    /// A gas-like fluid: air's density (1.2 kg/m³), an isothermal linear equation of state
+    /// (`γ = 1`) with a background pressure equal to its stiffness, so `p = c₀²ρ` and the fluid
+    /// spreads to fill the tank. Its speed of sound (8 m/s) is far below air's 343 m/s so that it
+    /// stays cheap to step; it behaves like a very soft gas.
+    pub fn gas() -> Self {
+        let speed_of_sound = 8.0;
+        let rest_density = 1.2;
+        Self {
+            rest_density,
+            speed_of_sound,
+            eos_exponent: 1.0,
+            background_pressure: rest_density * speed_of_sound * speed_of_sound,
+            kinematic_viscosity: 1.5e-5,
+            artificial_viscosity: 0.05,
+            ..Self::water()
         }
     }
 
@@ -177,6 +212,15 @@ impl SphParams {
         positive("rest_density", self.rest_density, 1.0e5, "kg/m³")?;
         positive("speed_of_sound", self.speed_of_sound, 1.0e4, "m/s")?;
         range("eos_exponent", self.eos_exponent, 1.0, 10.0, "")?;
+        let stiffness =
+            self.rest_density * self.speed_of_sound * self.speed_of_sound / self.eos_exponent;
+        range(
+            "background_pressure",
+            self.background_pressure,
+            0.0,
+            10.0 * stiffness,
+            "Pa",
+        )?;
         range(
             "kinematic_viscosity",
             self.kinematic_viscosity,
@@ -279,6 +323,7 @@ impl SphParams {
             speed_of_sound: self.speed_of_sound,
             eos_exponent: self.eos_exponent,
             stiffness,
+            background_pressure: self.background_pressure,
             artificial_viscosity: self.artificial_viscosity,
             kinematic_viscosity: self.kinematic_viscosity,
             gravity: self.gravity,
@@ -311,6 +356,10 @@ mod tests {
             ("rest_density", Box::new(|p| p.rest_density = 0.0)),
             ("speed_of_sound", Box::new(|p| p.speed_of_sound = f32::NAN)),
             ("eos_exponent", Box::new(|p| p.eos_exponent = 0.0)),
+            (
+                "background_pressure",
+                Box::new(|p| p.background_pressure = -1.0),
+            ),
             (
                 "kinematic_viscosity",
                 Box::new(|p| p.kinematic_viscosity = -1e-6),

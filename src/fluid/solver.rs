@@ -49,6 +49,8 @@ pub struct SphConstants {
     pub eos_exponent: f32,
     /// Tait stiffness `B = ρ₀c₀²/γ`, Pa.
     pub stiffness: f32,
+    /// Background pressure added to the equation of state, Pa.
+    pub background_pressure: f32,
     /// Monaghan artificial viscosity `α`.
     pub artificial_viscosity: f32,
     /// Kinematic viscosity `ν`, m²/s.
@@ -594,7 +596,8 @@ pub fn mean_neighbors(c: &SphConstants, fluid: &FluidSnapshot, walls: &Walls) ->
     total as f64 / fluid.len() as f64
 }
 
-/// Tait equation of state, clamped at zero: gauge pressure (Pa) at `density` (kg/m³).
+/// Tait equation of state plus the background pressure, clamped at zero: pressure (Pa) at
+/// `density` (kg/m³).
 #[inline]
 pub fn pressure_from_density(c: &SphConstants, density: f32) -> f32 {
     let ratio = density / c.rest_density;
@@ -606,13 +609,14 @@ pub fn pressure_from_density(c: &SphConstants, density: f32) -> f32 {
     } else {
         ratio.powf(c.eos_exponent)
     };
-    (c.stiffness * (powered - 1.0)).max(0.0)
+    (c.stiffness * (powered - 1.0) + c.background_pressure).max(0.0)
 }
 
 /// Inverse of [`pressure_from_density`] for non-negative pressure, kg/m³.
 #[inline]
 pub fn density_from_pressure(c: &SphConstants, pressure: f32) -> f32 {
-    c.rest_density * (1.0 + pressure.max(0.0) / c.stiffness).powf(1.0 / c.eos_exponent)
+    let excess = (pressure.max(0.0) - c.background_pressure) / c.stiffness;
+    c.rest_density * (1.0 + excess).max(0.0).powf(1.0 / c.eos_exponent)
 }
 
 /// Pressure and density of the wall particle at `x` (Adami et al. 2012): the kernel-weighted

@@ -109,6 +109,11 @@ impl SphSolver {
     pub fn clock(&self) -> &SubstepClock {
         &self.clock
     }
+
+    /// Starts simulated time again from zero (after a reset).
+    pub fn restart_clock(&mut self) {
+        self.clock = SubstepClock::default();
+    }
 }
 
 /// How the current tick is being split into sub-steps, and the simulated time so far.
@@ -171,6 +176,8 @@ pub struct SphStats {
     pub wall_particles: usize,
     /// Sub-steps in the last tick.
     pub substeps: u32,
+    /// Sub-steps since start-up (or the last reset).
+    pub total_substeps: u64,
     /// Length of the last sub-step, s.
     pub dt: f32,
     /// Simulated time, s.
@@ -556,6 +563,7 @@ pub(crate) fn update_stats(
         particles: count,
         wall_particles: solver.walls.len(),
         substeps: clock.substeps,
+        total_substeps: clock.total_substeps,
         dt: clock.dt,
         time: clock.time,
         dropped_time: clock.dropped,

@@ -1,0 +1,393 @@
+//! Feature `render`: the mouse and keyboard tools — pull, push, drag, pour and erase fluid
+//! under the cursor; pause, step, reset and tilt the tank from the keyboard. See
+//! [`SphInteractPlugin`].
+
+pub mod tools;
+
+use crate::control::{ResetSimulation, SimulationControl};
+use crate::fluid::{
+    Acceleration, FluidParticle, Position, SphParams, SphSubstep, SphSubstepSystems, SphSystems,
+    Velocity,
+};
+use crate::render::{SphCamera, cursor_to_world};
+use bevy::input::mouse::AccumulatedMouseScroll;
+use bevy::prelude::*;
+use bevy::window::PrimaryWindow;
+
+pub use tools::{PointerAction, PointerForce, falloff, nozzle_row, tilted_gravity};
+
+/// Mouse and keyboard tools for the fluid.
+///
+/// Mouse (over the tank, not over UI): the left button uses the [`PointerTool`] in
+/// [`PointerSettings`] (pull, drag, pour or erase); the right button always pushes; the wheel
+/// changes the radius. The tool's circle is drawn with gizmos.
+///
+/// Keyboard: `Space` pauses, `.` runs a single tick, `R` resets the scenario, `←`/`→` tilt the
+/// tank (turn gravity), `↑` levels it, `1`–`4` pick the tool.
+///
+/// The cursor is read each frame before the fixed steps
+/// ([`RunFixedMainLoopSystems::BeforeFixedMainLoop`]) into [`Pointer`]; the fixed step applies
+/// its force in [`SphSubstepSystems::ExternalForces`] and pours or erases in
+/// [`SphInteractSystems`], between [`SphSystems::Prepare`] and [`SphSystems::Simulate`].
+#[derive(Debug, Clone, Copy, Default)]
+pub struct SphInteractPlugin;
+
+/// What the left mouse button does.
+#[derive(Reflect, Debug, Clone, Copy, Default, PartialEq, Eq, Hash)]
+pub enum PointerTool {
+    /// Pull fluid towards the cursor (the right button pushes it away).
+    #[default]
+    Pull,
+    /// Move the fluid under the cursor with the cursor's velocity.
+    Drag,
+    /// Pour new particles from the cursor.
+    Pour,
+    /// Remove particles under the cursor.
+    Erase,
+}
+
+impl PointerTool {
+    /// Every tool, in menu order (keys `1`–`4`).
+    pub const ALL: [PointerTool; 4] = [
+        PointerTool::Pull,
+        PointerTool::Drag,
+        PointerTool::Pour,
+        PointerTool::Erase,
+    ];
+
+    /// The tool's name.
+    pub fn label(self) -> &'static str {
+        match self {
+            PointerTool::Pull => "Pull / push",
+            PointerTool::Drag => "Drag",
+            PointerTool::Pour => "Pour",
+            PointerTool::Erase => "Erase",
+        }
+    }
+}
+
+/// Tool settings; edit them live (the panel does).
+#[derive(Resource, Reflect, Debug, Clone, PartialEq)]
+#[reflect(Resource, Default, Debug)]
+pub struct PointerSettings {
+    /// The left button's tool.
+    pub tool: PointerTool,
+    /// Radius of every tool, m.
+    pub radius: f32,
+    /// Peak acceleration of pull and push, m/s².
+    pub strength: f32,
+    /// How fast pull damps and drag matches the cursor's velocity, 1/s.
+    pub rate: f32,
+    /// Speed of the poured jet, m/s.
+    pub pour_speed: f32,
+    /// Pouring stops at this many particles.
+    pub max_particles: usize,
+    /// How fast the arrow keys tilt the tank, rad/s.
+    pub tilt_rate: f32,
+    /// Largest tilt, rad.
+    pub max_tilt: f32,
+}
+
+impl Default for PointerSettings {
+    fn default() -> Self {
+        Self {
+            tool: PointerTool::Pull,
+            radius: 0.12,
+            strength: 60.0,
+            rate: 12.0,
+            pour_speed: 1.5,
+            max_particles: 20_000,
+            tilt_rate: 0.8,
+            max_tilt: 1.0,
+        }
+    }
+}
+
+/// The pointer as the simulation sees it, updated every frame.
+#[derive(Resource, Reflect, Debug, Clone, Default, PartialEq)]
+#[reflect(Resource, Default, Debug)]
+pub struct Pointer {
+    /// The cursor in world space, m (`None` outside the window).
+    pub world: Option<Vec2>,
+    /// The cursor's velocity, m/s.
+    pub velocity: Vec2,
+    /// The force the fixed step applies this frame.
+    pub force: PointerForce,
+    /// The left button is held with the pour or erase tool.
+    pub tool_active: bool,
+    /// UI has the pointer (set by the panel): the tools ignore the mouse.
+    pub over_ui: bool,
+    /// UI has the keyboard (set by the panel): the key bindings are ignored.
+    pub ui_has_keyboard: bool,
+    /// Current tilt of the tank, rad.
+    pub tilt: f32,
+    /// Distance poured since the last nozzle row, m.
+    poured: f32,
+}
+
+/// The pour and erase systems, in the fixed schedule between [`SphSystems::Prepare`] and
+/// [`SphSystems::Simulate`].
+#[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct SphInteractSystems;
+
+impl Plugin for SphInteractPlugin {
+    fn build(&self, app: &mut App) {
+        app.register_type::<PointerSettings>()
+            .register_type::<Pointer>()
+            .init_resource::<PointerSettings>()
+            .init_resource::<Pointer>()
+            .configure_sets(
+                FixedUpdate,
+                SphInteractSystems
+                    .after(SphSystems::Prepare)
+                    .before(SphSystems::Simulate),
+            )
+            .add_systems(
+                RunFixedMainLoop,
+                track_pointer.in_set(RunFixedMainLoopSystems::BeforeFixedMainLoop),
+            )
+            .add_systems(
+                FixedUpdate,
+                (pour_particles, erase_particles)
+                    .chain()
+                    .in_set(SphInteractSystems),
+            )
+            .add_systems(
+                SphSubstep,
+                apply_pointer_force.in_set(SphSubstepSystems::ExternalForces),
+            )
+            .add_systems(Update, (keyboard_controls, draw_pointer));
+    }
+}
+
+/// Reads the cursor, buttons and wheel into [`Pointer`].
+fn track_pointer(
+    window: Single<&Window, With<PrimaryWindow>>,
+    camera: Single<(&Camera, &GlobalTransform, &Projection), With<SphCamera>>,
+    buttons: Res<ButtonInput<MouseButton>>,
+    scroll: Res<AccumulatedMouseScroll>,
+    time: Res<Time<Real>>,
+    mut settings: ResMut<PointerSettings>,
+    mut pointer: ResMut<Pointer>,
+) {
+    let (camera, camera_transform, projection) = *camera;
+    let projection: &Projection = projection;
+    let world = match (
+        window.cursor_position(),
+        camera.logical_viewport_rect(),
+        projection,
+    ) {
+        (Some(cursor), Some(viewport), Projection::Orthographic(ortho)) => Some(cursor_to_world(
+            cursor - viewport.min,
+            viewport.size(),
+            ortho.area,
+            camera_transform,
+        )),
+        _ => None,
+    };
+    let dt = time.delta_secs();
+    let velocity = match (world, pointer.world) {
+        (Some(now), Some(before)) if dt > 0.0 => (now - before) / dt,
+        _ => Vec2::ZERO,
+    };
+    // Smooth over a few frames: cursor motion arrives in uneven steps.
+    let smoothed = pointer.velocity.lerp(velocity, 0.5);
+    pointer.world = world;
+    pointer.velocity = if smoothed.is_finite() {
+        smoothed
+    } else {
+        Vec2::ZERO
+    };
+
+    let free = world.is_some() && !pointer.over_ui;
+    if free && scroll.delta.y != 0.0 {
+        let radius = settings.radius * 1.1f32.powf(scroll.delta.y.clamp(-10.0, 10.0));
+        settings.radius = radius.clamp(0.01, 10.0);
+    }
+    let left = free && buttons.pressed(MouseButton::Left);
+    let right = free && buttons.pressed(MouseButton::Right);
+    let action = match (left, right, settings.tool) {
+        (_, true, _) => PointerAction::Push,
+        (true, _, PointerTool::Pull) => PointerAction::Pull,
+        (true, _, PointerTool::Drag) => PointerAction::Drag,
+        _ => PointerAction::None,
+    };
+    pointer.tool_active = left && matches!(settings.tool, PointerTool::Pour | PointerTool::Erase);
+    pointer.force = PointerForce {
+        action,
+        center: world.unwrap_or_default(),
+        velocity: pointer.velocity,
+        radius: settings.radius,
+        strength: settings.strength,
+        rate: settings.rate,
+    };
+}
+
+/// Adds the pointer's force to every particle it reaches (in each sub-step).
+fn apply_pointer_force(
+    pointer: Res<Pointer>,
+    mut particles: Query<(&Position, &Velocity, &mut Acceleration), With<FluidParticle>>,
+) {
+    let force = pointer.force;
+    if force.action == PointerAction::None {
+        return;
+    }
+    particles
+        .par_iter_mut()
+        .for_each(|(position, velocity, mut acceleration)| {
+            let a = force.acceleration(position.0, velocity.0);
+            if a != Vec2::ZERO {
+                acceleration.0 += a;
+            }
+        });
+}
+
+/// Pours rows of particles from a nozzle at the cursor while the pour tool is held, never onto
+/// existing particles and never past [`PointerSettings::max_particles`].
+fn pour_particles(
+    mut pointer: ResMut<Pointer>,
+    settings: Res<PointerSettings>,
+    params: Res<SphParams>,
+    time: Res<Time>,
+    particles: Query<&Position, With<FluidParticle>>,
+    mut commands: Commands,
+) {
+    let (Some(center), true) = (pointer.world, pointer.tool_active) else {
+        pointer.poured = 0.0;
+        return;
+    };
+    if settings.tool != PointerTool::Pour {
+        return;
+    }
+    let spacing = params.particle_spacing;
+    let jet = Vec2::new(0.0, -settings.pour_speed.max(0.01)) + 0.5 * pointer.velocity;
+    pointer.poured += jet.length() * time.delta_secs();
+    if pointer.poured < spacing {
+        return;
+    }
+    pointer.poured = 0.0;
+    let inside = |p: &Vec2| {
+        params.tank.is_none_or(|tank| {
+            p.x > 0.5 * spacing
+                && p.y > 0.5 * spacing
+                && p.x < tank.width - 0.5 * spacing
+                && p.y < tank.height - 0.5 * spacing
+        })
+    };
+    let min_gap_sq = (0.8 * spacing) * (0.8 * spacing);
+    let row: Vec<Vec2> = nozzle_row(center, jet, settings.radius, spacing)
+        .into_iter()
+        .filter(inside)
+        .filter(|p| {
+            particles
+                .iter()
+                .all(|q| q.distance_squared(*p) >= min_gap_sq)
+        })
+        .collect();
+    let room = settings
+        .max_particles
+        .saturating_sub(particles.iter().len());
+    commands.spawn_batch(
+        row.into_iter()
+            .take(room)
+            .map(move |p| (FluidParticle, Position(p), Velocity(jet)))
+            .collect::<Vec<_>>(),
+    );
+}
+
+/// Despawns the particles under the cursor while the erase tool is held.
+fn erase_particles(
+    pointer: Res<Pointer>,
+    settings: Res<PointerSettings>,
+    particles: Query<(Entity, &Position), With<FluidParticle>>,
+    mut commands: Commands,
+) {
+    let (Some(center), true) = (pointer.world, pointer.tool_active) else {
+        return;
+    };
+    if settings.tool != PointerTool::Erase {
+        return;
+    }
+    let radius_sq = settings.radius * settings.radius;
+    for (entity, position) in &particles {
+        if position.distance_squared(center) < radius_sq {
+            commands.entity(entity).despawn();
+        }
+    }
+}
+
+/// Space, `.`, `R`, arrows and `1`–`4`.
+fn keyboard_controls(
+    keys: Res<ButtonInput<KeyCode>>,
+    time: Res<Time<Real>>,
+    mut pointer: ResMut<Pointer>,
+    mut settings: ResMut<PointerSettings>,
+    mut control: ResMut<SimulationControl>,
+    mut params: ResMut<SphParams>,
+    mut resets: MessageWriter<ResetSimulation>,
+) {
+    if pointer.ui_has_keyboard {
+        return;
+    }
+    if keys.just_pressed(KeyCode::Space) {
+        control.toggle_pause();
+    }
+    if keys.just_pressed(KeyCode::Period) {
+        control.step();
+    }
+    if keys.just_pressed(KeyCode::KeyR) {
+        resets.write(ResetSimulation);
+    }
+    for (key, tool) in [
+        KeyCode::Digit1,
+        KeyCode::Digit2,
+        KeyCode::Digit3,
+        KeyCode::Digit4,
+    ]
+    .into_iter()
+    .zip(PointerTool::ALL)
+    {
+        if keys.just_pressed(key) {
+            settings.tool = tool;
+        }
+    }
+    let turn = match (
+        keys.pressed(KeyCode::ArrowLeft),
+        keys.pressed(KeyCode::ArrowRight),
+    ) {
+        (true, false) => 1.0,
+        (false, true) => -1.0,
+        _ => 0.0,
+    };
+    let mut tilt = pointer.tilt + turn * settings.tilt_rate * time.delta_secs();
+    if keys.just_pressed(KeyCode::ArrowUp) {
+        tilt = 0.0;
+    }
+    tilt = tilt.clamp(-settings.max_tilt, settings.max_tilt);
+    if tilt != pointer.tilt {
+        pointer.tilt = tilt;
+        let gravity = tilted_gravity(params.gravity, tilt);
+        if gravity.is_finite() && params.gravity != gravity {
+            params.gravity = gravity;
+        }
+    }
+}
+
+/// The tool's circle at the cursor.
+fn draw_pointer(pointer: Res<Pointer>, settings: Res<PointerSettings>, mut gizmos: Gizmos) {
+    let Some(center) = pointer.world else {
+        return;
+    };
+    if pointer.over_ui {
+        return;
+    }
+    let color = match (pointer.force.action, settings.tool, pointer.tool_active) {
+        (PointerAction::Pull, ..) => Color::srgb(0.3, 1.0, 0.5),
+        (PointerAction::Push, ..) => Color::srgb(1.0, 0.4, 0.3),
+        (PointerAction::Drag, ..) => Color::srgb(1.0, 0.85, 0.3),
+        (_, PointerTool::Pour, true) => Color::srgb(0.4, 0.7, 1.0),
+        (_, PointerTool::Erase, true) => Color::srgb(1.0, 0.3, 0.9),
+        _ => Color::srgba(1.0, 1.0, 1.0, 0.6),
+    };
+    gizmos.circle_2d(Isometry2d::from_translation(center), settings.radius, color);
+}

@@ -1,0 +1,500 @@
+//! Feature `egui`: the tweak panel — every fluid parameter live, presets, scenarios, render and
+//! tool settings, statistics, pause/step/reset. See [`SphPanelPlugin`].
+
+mod widgets;
+
+use crate::control::{ResetSimulation, SimulationControl};
+use crate::fluid::{KernelKind, ScenarioKind, SphParams, SphParamsStatus, SphScenario, SphStats};
+use crate::interact::{Pointer, PointerSettings, PointerTool};
+use crate::render::{ColorMap, ParticleView, RenderMode, ViewInsets};
+use bevy::prelude::*;
+use bevy_egui::input::EguiWantsInput;
+use bevy_egui::{EguiContexts, EguiPlugin, EguiPrimaryContextPass, egui};
+use widgets::{color_bar, enum_combo, param_slider};
+
+/// The egui tweak panel, docked on the left of the window.
+///
+/// It edits [`SphParams`], [`SphScenario`], [`ParticleView`] and [`PointerSettings`] directly
+/// (the fluid validates every change before using it, and the panel shows a refused one in
+/// red), drives [`SimulationControl`] and [`ResetSimulation`], and shows [`SphStats`]. While the
+/// pointer or keyboard is over the panel, the mouse tools and key bindings ignore it; the
+/// camera keeps the tank in the part of the window the panel leaves free ([`ViewInsets`]).
+///
+/// Adds [`EguiPlugin`] if the app has none.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct SphPanelPlugin;
+
+impl Plugin for SphPanelPlugin {
+    fn build(&self, app: &mut App) {
+        if !app.is_plugin_added::<EguiPlugin>() {
+            app.add_plugins(EguiPlugin::default());
+        }
+        app.init_resource::<PanelState>()
+            .add_systems(PreUpdate, share_input_focus)
+            .add_systems(EguiPrimaryContextPass, panel);
+    }
+}
+
+/// Whether the panel is open, and rates measured between frames.
+#[derive(Resource, Debug, Clone)]
+pub struct PanelState {
+    /// Show the panel (toggle with `Tab`).
+    pub open: bool,
+    rates: Rates,
+}
+
+impl Default for PanelState {
+    fn default() -> Self {
+        Self {
+            open: true,
+            rates: Rates::default(),
+        }
+    }
+}
+
+/// Frame and simulation rates, eased over frames.
+#[derive(Debug, Clone, Copy, Default)]
+struct Rates {
+    fps: f32,
+    substeps_per_s: f32,
+    sim_speed: f32,
+    last_substeps: u64,
+    last_time: f64,
+}
+
+impl Rates {
+    fn update(&mut self, dt: f32, stats: &SphStats) {
+        if dt <= 0.0 {
+            return;
+        }
+        let ease = |old: f32, new: f32| {
+            if old == 0.0 {
+                new
+            } else {
+                old + 0.05 * (new - old)
+            }
+        };
+        let substeps = stats.total_substeps.saturating_sub(self.last_substeps) as f32 / dt;
+        let sim = ((stats.time - self.last_time).max(0.0) as f32) / dt;
+        self.fps = ease(self.fps, 1.0 / dt);
+        self.substeps_per_s = ease(self.substeps_per_s, substeps);
+        self.sim_speed = ease(self.sim_speed, sim);
+        self.last_substeps = stats.total_substeps;
+        self.last_time = stats.time;
+    }
+}
+
+/// Tells the tools whether egui has the pointer or keyboard.
+fn share_input_focus(wants: Res<EguiWantsInput>, mut pointer: ResMut<Pointer>) {
+    let over_ui = wants.wants_any_pointer_input();
+    let keyboard = wants.wants_any_keyboard_input();
+    if pointer.over_ui != over_ui || pointer.ui_has_keyboard != keyboard {
+        pointer.over_ui = over_ui;
+        pointer.ui_has_keyboard = keyboard;
+    }
+}
+
+/// Everything the panel reads and edits.
+#[derive(bevy::ecs::system::SystemParam)]
+struct PanelData<'w> {
+    params: ResMut<'w, SphParams>,
+    status: Res<'w, SphParamsStatus>,
+    stats: Res<'w, SphStats>,
+    scenario: ResMut<'w, SphScenario>,
+    view: ResMut<'w, ParticleView>,
+    tools: ResMut<'w, PointerSettings>,
+    pointer: Res<'w, Pointer>,
+    control: ResMut<'w, SimulationControl>,
+    insets: ResMut<'w, ViewInsets>,
+    state: ResMut<'w, PanelState>,
+    time: Res<'w, Time<Real>>,
+    keys: Res<'w, ButtonInput<KeyCode>>,
+}
+
+fn panel(
+    mut contexts: EguiContexts,
+    mut data: PanelData,
+    mut resets: MessageWriter<ResetSimulation>,
+) -> Result {
+    let ctx = contexts.ctx_mut()?;
+    if data.keys.just_pressed(KeyCode::Tab) && !ctx.egui_wants_keyboard_input() {
+        data.state.open = !data.state.open;
+    }
+    let dt = data.time.delta_secs();
+    let stats = data.stats.clone();
+    data.state.rates.update(dt, &stats);
+    if !data.state.open {
+        data.insets.set_if_neq(ViewInsets::default());
+        return Ok(());
+    }
+    let mut root = egui::Ui::new(
+        ctx.clone(),
+        "sph_panel_root".into(),
+        egui::UiBuilder::new()
+            .layer_id(egui::LayerId::background())
+            .max_rect(ctx.viewport_rect()),
+    );
+    let width = egui::Panel::left("sph_panel")
+        .resizable(true)
+        .default_size(300.0)
+        .show(&mut root, |ui| {
+            egui::ScrollArea::vertical().show(ui, |ui| {
+                controls_section(ui, &mut data, &mut resets);
+                stats_section(ui, &data, &stats);
+                scenario_section(ui, &mut data, &mut resets);
+                fluid_section(ui, &mut data);
+                render_section(ui, &mut data);
+                tools_section(ui, &mut data);
+            });
+        })
+        .response
+        .rect
+        .width();
+    data.insets.set_if_neq(ViewInsets {
+        left: width,
+        ..default()
+    });
+    Ok(())
+}
+
+fn controls_section(
+    ui: &mut egui::Ui,
+    data: &mut PanelData,
+    resets: &mut MessageWriter<ResetSimulation>,
+) {
+    ui.heading("bevy_sph2d");
+    ui.horizontal(|ui| {
+        let label = if data.control.paused {
+            "▶ Run"
+        } else {
+            "⏸ Pause"
+        };
+        if ui.button(label).on_hover_text("Space").clicked() {
+            data.control.toggle_pause();
+        }
+        if ui
+            .button("Step")
+            .on_hover_text(". (one fixed tick)")
+            .clicked()
+        {
+            data.control.step();
+        }
+        if ui.button("⟲ Reset").on_hover_text("R").clicked() {
+            resets.write(ResetSimulation);
+        }
+    });
+    ui.small("Mouse: left = tool, right = push, wheel = radius. Left/Right arrows tilt, Up levels, 1–4 tools, Tab hides the panel.");
+}
+
+fn stats_section(ui: &mut egui::Ui, data: &PanelData, stats: &SphStats) {
+    egui::CollapsingHeader::new("Statistics")
+        .default_open(true)
+        .show(ui, |ui| {
+            let rates = data.state.rates;
+            let ms_per_substep = if stats.substeps > 0 {
+                stats.tick_ms / stats.substeps as f32
+            } else {
+                0.0
+            };
+            egui::Grid::new("stats").num_columns(2).show(ui, |ui| {
+                let mut row = |name: &str, value: String| {
+                    ui.label(name);
+                    ui.monospace(value);
+                    ui.end_row();
+                };
+                row("particles", format!("{}", stats.particles));
+                row("wall particles", format!("{}", stats.wall_particles));
+                row("sub-steps / s", format!("{:.0}", rates.substeps_per_s));
+                row("ms / sub-step", format!("{ms_per_substep:.2}"));
+                row("ms / tick", format!("{:.1}", stats.tick_ms));
+                row("sub-steps / tick", format!("{}", stats.substeps));
+                row("sub-step dt", format!("{:.2e} s", stats.dt));
+                row("sim speed", format!("{:.2} × real time", rates.sim_speed));
+                row(
+                    "density error",
+                    format!(
+                        "mean {:.2} %, max {:.1} %",
+                        stats.mean_density_error, stats.max_density_error
+                    ),
+                );
+                row("max speed", format!("{:.2} m/s", stats.max_speed));
+                row("sim time", format!("{:.2} s", stats.time));
+                row("fps", format!("{:.0}", rates.fps));
+            });
+            if stats.non_finite_resets > 0 {
+                ui.colored_label(
+                    egui::Color32::LIGHT_RED,
+                    format!("{} non-finite updates held back", stats.non_finite_resets),
+                );
+            }
+        });
+}
+
+fn scenario_section(
+    ui: &mut egui::Ui,
+    data: &mut PanelData,
+    resets: &mut MessageWriter<ResetSimulation>,
+) {
+    egui::CollapsingHeader::new("Scenario")
+        .default_open(true)
+        .show(ui, |ui| {
+            let mut scenario = *data.scenario;
+            enum_combo(
+                ui,
+                "scenario",
+                &mut scenario.kind,
+                &ScenarioKind::ALL,
+                |k| k.label(),
+            );
+            ui.add(
+                egui::Slider::new(&mut scenario.particles, 200..=30_000)
+                    .logarithmic(true)
+                    .text("particles"),
+            );
+            let spacing = scenario.spacing(&SphScenario::tank(&data.params));
+            ui.small(format!(
+                "spacing {:.1} mm; applies on reset",
+                1000.0 * spacing
+            ));
+            if scenario != *data.scenario {
+                *data.scenario = scenario;
+            }
+            if ui.button("Start scenario").clicked() {
+                resets.write(ResetSimulation);
+            }
+        });
+}
+
+fn fluid_section(ui: &mut egui::Ui, data: &mut PanelData) {
+    egui::CollapsingHeader::new("Fluid")
+        .default_open(true)
+        .show(ui, |ui| {
+            let mut p = data.params.clone();
+            ui.horizontal(|ui| {
+                ui.label("preset");
+                let keep = |preset: SphParams, current: &SphParams| SphParams {
+                    particle_spacing: current.particle_spacing,
+                    support_ratio: current.support_ratio,
+                    kernel: current.kernel,
+                    gravity: current.gravity,
+                    tank: current.tank,
+                    max_substeps: current.max_substeps,
+                    speed_of_sound: if preset.background_pressure > 0.0 {
+                        preset.speed_of_sound
+                    } else {
+                        current.speed_of_sound
+                    },
+                    ..preset
+                };
+                if ui.button("Water").clicked() {
+                    p = keep(SphParams::water(), &p);
+                }
+                if ui.button("Honey").clicked() {
+                    p = keep(SphParams::honey(), &p);
+                }
+                if ui.button("Gas").clicked() {
+                    p = keep(SphParams::gas(), &p);
+                }
+            });
+            param_slider(
+                ui,
+                &mut p.rest_density,
+                0.5..=5000.0,
+                "rest density ρ₀",
+                "kg/m³",
+                true,
+            );
+            param_slider(
+                ui,
+                &mut p.speed_of_sound,
+                1.0..=300.0,
+                "speed of sound c₀",
+                "m/s",
+                true,
+            );
+            param_slider(
+                ui,
+                &mut p.eos_exponent,
+                1.0..=10.0,
+                "EOS exponent γ",
+                "",
+                false,
+            );
+            let stiffness = p.rest_density * p.speed_of_sound * p.speed_of_sound / p.eos_exponent;
+            param_slider(
+                ui,
+                &mut p.background_pressure,
+                0.0..=2.0 * stiffness,
+                "background pressure",
+                "Pa",
+                false,
+            );
+            param_slider(
+                ui,
+                &mut p.kinematic_viscosity,
+                0.0..=1.0e-2,
+                "kinematic viscosity ν",
+                "m²/s",
+                true,
+            );
+            param_slider(
+                ui,
+                &mut p.artificial_viscosity,
+                0.0..=1.0,
+                "artificial viscosity α",
+                "",
+                false,
+            );
+            param_slider(
+                ui,
+                &mut p.support_ratio,
+                1.5..=5.0,
+                "support H/Δx",
+                "",
+                false,
+            );
+            enum_combo(
+                ui,
+                "kernel",
+                &mut p.kernel,
+                &[
+                    KernelKind::WendlandC2,
+                    KernelKind::CubicSpline,
+                    KernelKind::Muller,
+                ],
+                |k| match k {
+                    KernelKind::WendlandC2 => "Wendland C2",
+                    KernelKind::CubicSpline => "Cubic spline",
+                    KernelKind::Muller => "Müller (poly6/spiky)",
+                },
+            );
+            param_slider(
+                ui,
+                &mut p.gravity.x,
+                -30.0..=30.0,
+                "gravity x",
+                "m/s²",
+                false,
+            );
+            param_slider(
+                ui,
+                &mut p.gravity.y,
+                -30.0..=30.0,
+                "gravity y",
+                "m/s²",
+                false,
+            );
+            if let Some(tank) = &mut p.tank {
+                param_slider(ui, &mut tank.width, 0.1..=10.0, "tank width", "m", true);
+                param_slider(ui, &mut tank.height, 0.1..=10.0, "tank height", "m", true);
+            }
+            param_slider(ui, &mut p.cfl_number, 0.05..=1.0, "CFL number", "", false);
+            ui.add(
+                egui::Slider::new(&mut p.max_substeps, 1..=2000)
+                    .logarithmic(true)
+                    .text("max sub-steps / tick"),
+            );
+            param_slider(
+                ui,
+                &mut p.wall_restitution,
+                0.0..=1.0,
+                "wall restitution",
+                "",
+                false,
+            );
+            ui.small(format!(
+                "particle spacing Δx = {:.1} mm (set by the scenario's particle count)",
+                1000.0 * p.particle_spacing
+            ));
+            if p != *data.params {
+                *data.params = p;
+            }
+            if let Some(error) = &data.status.error {
+                ui.colored_label(
+                    egui::Color32::LIGHT_RED,
+                    format!("refused: {error}; running on the last valid values"),
+                );
+            }
+        });
+}
+
+fn render_section(ui: &mut egui::Ui, data: &mut PanelData) {
+    egui::CollapsingHeader::new("Rendering")
+        .default_open(true)
+        .show(ui, |ui| {
+            let mut view = data.view.clone();
+            enum_combo(ui, "colour by", &mut view.mode, &RenderMode::ALL, |m| {
+                m.label()
+            });
+            enum_combo(ui, "colour map", &mut view.color_map, &ColorMap::ALL, |m| {
+                m.label()
+            });
+            if view.mode != RenderMode::Solid {
+                ui.checkbox(&mut view.auto_range, "auto range");
+                ui.add_enabled_ui(!view.auto_range, |ui| {
+                    ui.horizontal(|ui| {
+                        ui.add(egui::DragValue::new(&mut view.range.min).speed(0.1));
+                        ui.label("to");
+                        ui.add(egui::DragValue::new(&mut view.range.max).speed(0.1));
+                        ui.label(view.mode.unit());
+                    });
+                });
+                color_bar(ui, view.color_map, view.range, view.mode.unit());
+            }
+            param_slider(
+                ui,
+                &mut view.sprite_scale,
+                0.5..=4.0,
+                "sprite size",
+                "Δx",
+                false,
+            );
+            ui.checkbox(&mut view.interpolate, "interpolate between steps");
+            ui.checkbox(&mut view.outline, "outline tank and obstacles");
+            if view != *data.view {
+                *data.view = view;
+            }
+        });
+}
+
+fn tools_section(ui: &mut egui::Ui, data: &mut PanelData) {
+    egui::CollapsingHeader::new("Mouse tools")
+        .default_open(true)
+        .show(ui, |ui| {
+            let mut tools = data.tools.clone();
+            ui.horizontal_wrapped(|ui| {
+                for tool in PointerTool::ALL {
+                    ui.selectable_value(&mut tools.tool, tool, tool.label());
+                }
+            });
+            param_slider(ui, &mut tools.radius, 0.01..=1.0, "radius", "m", true);
+            param_slider(
+                ui,
+                &mut tools.strength,
+                1.0..=500.0,
+                "strength",
+                "m/s²",
+                true,
+            );
+            param_slider(
+                ui,
+                &mut tools.rate,
+                0.5..=100.0,
+                "drag / damping rate",
+                "1/s",
+                true,
+            );
+            param_slider(
+                ui,
+                &mut tools.pour_speed,
+                0.1..=5.0,
+                "pour speed",
+                "m/s",
+                false,
+            );
+            ui.label(format!("tilt {:.0}°", data.pointer.tilt.to_degrees()));
+            if tools != *data.tools {
+                *data.tools = tools;
+            }
+        });
+}

@@ -1,0 +1,73 @@
+//! Small egui helpers of the panel.
+
+use crate::render::{ColorMap, ColorRange};
+use bevy_egui::egui;
+use core::ops::RangeInclusive;
+
+/// A labelled slider with a unit; logarithmic for quantities spanning decades.
+pub(super) fn param_slider(
+    ui: &mut egui::Ui,
+    value: &mut f32,
+    range: RangeInclusive<f32>,
+    label: &str,
+    unit: &str,
+    logarithmic: bool,
+) {
+    let text = if unit.is_empty() {
+        label.to_string()
+    } else {
+        format!("{label} ({unit})")
+    };
+    ui.add(
+        egui::Slider::new(value, range)
+            .logarithmic(logarithmic)
+            .clamping(egui::SliderClamping::Always)
+            .text(text),
+    );
+}
+
+/// A combo box over `options`.
+pub(super) fn enum_combo<T: Copy + PartialEq>(
+    ui: &mut egui::Ui,
+    label: &str,
+    value: &mut T,
+    options: &[T],
+    name: impl Fn(T) -> &'static str,
+) {
+    egui::ComboBox::from_label(label)
+        .selected_text(name(*value))
+        .show_ui(ui, |ui| {
+            for &option in options {
+                ui.selectable_value(value, option, name(option));
+            }
+        });
+}
+
+/// The colour bar of `map` over `range`, with its end values.
+pub(super) fn color_bar(ui: &mut egui::Ui, map: ColorMap, range: ColorRange, unit: &str) {
+    let width = ui.available_width().min(260.0);
+    let (rect, _) = ui.allocate_exact_size(egui::vec2(width, 14.0), egui::Sense::hover());
+    let steps = 64;
+    for i in 0..steps {
+        let t = (i as f32 + 0.5) / steps as f32;
+        let c = map.sample(t).to_srgba();
+        let color = egui::Color32::from_rgb(
+            (c.red * 255.0) as u8,
+            (c.green * 255.0) as u8,
+            (c.blue * 255.0) as u8,
+        );
+        let x0 = rect.left() + rect.width() * i as f32 / steps as f32;
+        let x1 = rect.left() + rect.width() * (i + 1) as f32 / steps as f32;
+        let cell = egui::Rect::from_min_max(
+            egui::pos2(x0, rect.top()),
+            egui::pos2(x1 + 0.5, rect.bottom()),
+        );
+        ui.painter().rect_filled(cell, 0.0, color);
+    }
+    ui.horizontal(|ui| {
+        ui.small(format!("{:.4} {unit}", range.min));
+        ui.with_layout(egui::Layout::right_to_left(egui::Align::Center), |ui| {
+            ui.small(format!("{:.4} {unit}", range.max));
+        });
+    });
+}

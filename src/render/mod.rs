@@ -1,0 +1,391 @@
+//! Feature `render`: a sprite per fluid particle, tinted through a colour map by density, speed
+//! or pressure, moved smoothly between fixed steps; a camera that keeps the tank in view. See
+//! [`SphRenderPlugin`].
+
+pub mod colormap;
+pub mod view;
+
+use crate::fluid::{
+    Density, FluidParticle, Obstacle, Position, Pressure, SphParams, SphSystems, Velocity,
+};
+use bevy::asset::RenderAssetUsages;
+use bevy::prelude::*;
+use bevy::render::render_resource::{Extent3d, TextureDimension, TextureFormat};
+
+pub use colormap::{ColorMap, ColorRange, ColorTable};
+pub use view::{SphCamera, ViewInsets, cursor_to_world, fit_tank};
+
+/// Draws fluid particles as sprites and keeps a [`SphCamera`] framing the tank.
+///
+/// Every [`FluidParticle`] gets a round [`Sprite`] when it appears (it goes with the entity when
+/// the particle is despawned). Each frame, after the fixed steps of that frame
+/// ([`RunFixedMainLoopSystems::AfterFixedMainLoop`]):
+/// - `Transform` is placed between the particle's last two fixed-step positions by
+///   [`Time<Fixed>::overstep_fraction`], so motion is smooth at any display rate (the sprite
+///   lags the simulation by at most one tick);
+/// - the sprite colour shows the [`ParticleView`]'s quantity through its [`ColorMap`], over a
+///   range that follows the data (quantiles, eased between frames) or is set by hand;
+/// - cameras with [`SphCamera`] are fitted to the tank in the window area that
+///   [`ViewInsets`] leaves free, so the tank fills the window at any size;
+/// - the tank walls and [`Obstacle`]s are outlined with gizmos.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct SphRenderPlugin;
+
+/// What the sprites show.
+#[derive(Reflect, Debug, Clone, Copy, Default, PartialEq, Eq, Hash)]
+pub enum RenderMode {
+    /// Density, kg/m³.
+    #[default]
+    Density,
+    /// Speed, m/s.
+    Speed,
+    /// Pressure, Pa.
+    Pressure,
+    /// One colour for every particle.
+    Solid,
+}
+
+impl RenderMode {
+    /// Every mode, in menu order.
+    pub const ALL: [RenderMode; 4] = [
+        RenderMode::Density,
+        RenderMode::Speed,
+        RenderMode::Pressure,
+        RenderMode::Solid,
+    ];
+
+    /// The quantity's name.
+    pub fn label(self) -> &'static str {
+        match self {
+            RenderMode::Density => "Density",
+            RenderMode::Speed => "Speed",
+            RenderMode::Pressure => "Pressure",
+            RenderMode::Solid => "Solid colour",
+        }
+    }
+
+    /// The quantity's unit.
+    pub fn unit(self) -> &'static str {
+        match self {
+            RenderMode::Density => "kg/m³",
+            RenderMode::Speed => "m/s",
+            RenderMode::Pressure => "Pa",
+            RenderMode::Solid => "",
+        }
+    }
+
+    /// The quantiles an auto-scaled range spans: density and pressure ignore the thin
+    /// free-surface layer (low density by construction) and the odd splash.
+    fn quantiles(self) -> (f32, f32) {
+        match self {
+            RenderMode::Density => (0.05, 0.995),
+            RenderMode::Speed => (0.0, 0.99),
+            RenderMode::Pressure => (0.01, 0.99),
+            RenderMode::Solid => (0.0, 1.0),
+        }
+    }
+}
+
+/// How particles are drawn; edit it live (the panel does).
+#[derive(Resource, Reflect, Debug, Clone, PartialEq)]
+#[reflect(Resource, Default, Debug)]
+pub struct ParticleView {
+    /// The quantity the colour shows.
+    pub mode: RenderMode,
+    /// The colour map.
+    pub color_map: ColorMap,
+    /// Follow the data: [`range`](Self::range) is updated every frame.
+    pub auto_range: bool,
+    /// The values at the map's two ends, in the mode's unit.
+    pub range: ColorRange,
+    /// The colour of [`RenderMode::Solid`].
+    pub solid_color: Color,
+    /// Sprite diameter, in particle spacings (soft-edged discs that overlap into a surface).
+    pub sprite_scale: f32,
+    /// Draw between fixed steps (off: draw at the last step).
+    pub interpolate: bool,
+    /// Outline the tank and obstacles.
+    pub outline: bool,
+}
+
+impl Default for ParticleView {
+    fn default() -> Self {
+        Self {
+            mode: RenderMode::Density,
+            color_map: ColorMap::Blues,
+            auto_range: true,
+            range: ColorRange::new(950.0, 1050.0),
+            solid_color: Color::srgb(0.2, 0.45, 0.9),
+            sprite_scale: 1.8,
+            interpolate: true,
+            outline: true,
+        }
+    }
+}
+
+/// The particle's position at the previous fixed step, m: the start of the interpolation.
+#[derive(Component, Reflect, Debug, Clone, Copy, Default, Deref, DerefMut, PartialEq)]
+#[reflect(Component, Default, Debug)]
+pub struct PreviousPosition(pub Vec2);
+
+/// The shared round texture of particle sprites.
+#[derive(Resource, Debug, Clone)]
+pub struct ParticleTexture(pub Handle<Image>);
+
+/// The sprite layer of the render systems, after the fixed steps of each frame.
+#[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum SphRenderSystems {
+    /// Camera fitting.
+    Camera,
+    /// Transforms and colours.
+    Sprites,
+}
+
+impl Plugin for SphRenderPlugin {
+    fn build(&self, app: &mut App) {
+        app.register_type::<ParticleView>()
+            .register_type::<PreviousPosition>()
+            .init_resource::<ParticleView>()
+            .init_resource::<ViewInsets>()
+            .add_systems(Startup, create_particle_texture)
+            .add_observer(attach_sprite)
+            .add_systems(
+                FixedUpdate,
+                remember_previous_positions.before(SphSystems::Simulate),
+            )
+            .configure_sets(
+                RunFixedMainLoop,
+                (SphRenderSystems::Camera, SphRenderSystems::Sprites)
+                    .chain()
+                    .in_set(RunFixedMainLoopSystems::AfterFixedMainLoop),
+            )
+            .add_systems(
+                RunFixedMainLoop,
+                (
+                    view::fit_cameras.in_set(SphRenderSystems::Camera),
+                    (update_color_range, update_sprites)
+                        .chain()
+                        .in_set(SphRenderSystems::Sprites),
+                ),
+            )
+            .add_systems(Update, draw_outlines);
+    }
+}
+
+/// Texture side, px: enough for a smooth edge at the sizes particles are drawn.
+const TEXTURE_SIZE: u32 = 32;
+
+/// Alpha of the particle disc at `r` (0 centre, 1 rim): opaque core, soft rim.
+fn disc_alpha(r: f32) -> f32 {
+    let edge = ((1.0 - r) / 0.35).clamp(0.0, 1.0);
+    edge * edge * (3.0 - 2.0 * edge)
+}
+
+fn create_particle_texture(mut commands: Commands, mut images: ResMut<Assets<Image>>) {
+    let n = TEXTURE_SIZE;
+    let mut data = Vec::with_capacity((n * n * 4) as usize);
+    for y in 0..n {
+        for x in 0..n {
+            let centre = Vec2::splat(n as f32 / 2.0);
+            let r = (Vec2::new(x as f32 + 0.5, y as f32 + 0.5) - centre).length() / centre.x;
+            let a = (disc_alpha(r) * 255.0).round() as u8;
+            data.extend_from_slice(&[255, 255, 255, a]);
+        }
+    }
+    let image = Image::new(
+        Extent3d {
+            width: n,
+            height: n,
+            depth_or_array_layers: 1,
+        },
+        TextureDimension::D2,
+        data,
+        TextureFormat::Rgba8UnormSrgb,
+        RenderAssetUsages::RENDER_WORLD,
+    );
+    commands.insert_resource(ParticleTexture(images.add(image)));
+}
+
+/// Gives a new particle its sprite, placed at its position.
+fn attach_sprite(
+    add: On<Add, FluidParticle>,
+    particles: Query<&Position>,
+    texture: Option<Res<ParticleTexture>>,
+    params: Res<SphParams>,
+    view: Res<ParticleView>,
+    mut commands: Commands,
+) {
+    let position = particles.get(add.entity).map(|p| p.0).unwrap_or_default();
+    let size = Vec2::splat(view.sprite_scale * params.particle_spacing);
+    let sprite = Sprite {
+        image: texture.map(|t| t.0.clone()).unwrap_or_default(),
+        custom_size: Some(size),
+        color: view.solid_color,
+        ..default()
+    };
+    commands.entity(add.entity).insert((
+        sprite,
+        Transform::from_translation(position.extend(0.0)),
+        PreviousPosition(position),
+    ));
+}
+
+fn remember_previous_positions(mut particles: Query<(&Position, &mut PreviousPosition)>) {
+    particles
+        .par_iter_mut()
+        .for_each(|(position, mut previous)| {
+            previous.set_if_neq(PreviousPosition(position.0));
+        });
+}
+
+/// The value a particle shows in `mode`.
+fn shown_value(
+    mode: RenderMode,
+    velocity: &Velocity,
+    density: &Density,
+    pressure: &Pressure,
+) -> f32 {
+    match mode {
+        RenderMode::Density => density.0,
+        RenderMode::Speed => velocity.length(),
+        RenderMode::Pressure => pressure.0,
+        RenderMode::Solid => 0.0,
+    }
+}
+
+/// Auto-scaling: moves [`ParticleView::range`] towards the current quantiles (at once when
+/// the mode changes).
+fn update_color_range(
+    mut view: ResMut<ParticleView>,
+    particles: Query<(&Velocity, &Density, &Pressure), With<FluidParticle>>,
+    mut values: Local<Vec<f32>>,
+    mut last_mode: Local<Option<RenderMode>>,
+) {
+    if !view.auto_range || view.mode == RenderMode::Solid {
+        return;
+    }
+    let mode = view.mode;
+    values.clear();
+    values.extend(particles.iter().map(|(v, d, p)| shown_value(mode, v, d, p)));
+    let (low, high) = mode.quantiles();
+    let Some(mut target) = ColorRange::from_quantiles(&values, low, high) else {
+        return;
+    };
+    // Keep a visible spread when the field is uniform (a fluid at rest).
+    let spread = match mode {
+        RenderMode::Density => 0.01 * target.max.abs().max(1.0),
+        RenderMode::Speed => 0.05,
+        _ => 1.0,
+    };
+    if target.max - target.min < spread {
+        let mid = 0.5 * (target.max + target.min);
+        target = ColorRange::new(mid - 0.5 * spread, mid + 0.5 * spread);
+        if mode == RenderMode::Speed {
+            target = ColorRange::new(0.0, spread);
+        }
+    }
+    let rate = if *last_mode == Some(mode) { 0.1 } else { 1.0 };
+    *last_mode = Some(mode);
+    let range = view.range.approach(target, rate);
+    if range != view.range {
+        view.range = range;
+    }
+}
+
+/// What the sprite pass reads and writes per particle.
+type SpriteData = (
+    &'static Position,
+    &'static PreviousPosition,
+    &'static Velocity,
+    &'static Density,
+    &'static Pressure,
+    &'static mut Transform,
+    &'static mut Sprite,
+);
+
+/// Interpolated transforms, colours and sizes, in parallel.
+fn update_sprites(
+    view: Res<ParticleView>,
+    params: Res<SphParams>,
+    fixed: Res<Time<Fixed>>,
+    mut table: Local<Option<(ColorMap, ColorTable)>>,
+    mut particles: Query<SpriteData, With<FluidParticle>>,
+) {
+    if table.as_ref().is_none_or(|(map, _)| *map != view.color_map) {
+        *table = Some((view.color_map, view.color_map.table(256)));
+    }
+    let Some((_, table)) = table.as_ref() else {
+        return;
+    };
+    let alpha = if view.interpolate {
+        fixed.overstep_fraction().clamp(0.0, 1.0)
+    } else {
+        1.0
+    };
+    let size = Some(Vec2::splat(view.sprite_scale * params.particle_spacing));
+    let view = &*view;
+    particles.par_iter_mut().for_each(
+        |(position, previous, velocity, density, pressure, mut transform, mut sprite)| {
+            let at = previous.0.lerp(position.0, alpha).extend(0.0);
+            if transform.translation != at {
+                transform.translation = at;
+            }
+            let color = match view.mode {
+                RenderMode::Solid => view.solid_color,
+                mode => Color::LinearRgba(
+                    table.map(shown_value(mode, velocity, density, pressure), view.range),
+                ),
+            };
+            if sprite.color != color || sprite.custom_size != size {
+                sprite.color = color;
+                sprite.custom_size = size;
+            }
+        },
+    );
+}
+
+fn draw_outlines(
+    view: Res<ParticleView>,
+    params: Res<SphParams>,
+    obstacles: Query<&Obstacle>,
+    mut gizmos: Gizmos,
+) {
+    if !view.outline {
+        return;
+    }
+    let color = Color::srgb(0.75, 0.8, 0.85);
+    if let Some(tank) = params.tank {
+        let size = tank.size();
+        gizmos.rect_2d(Isometry2d::from_translation(0.5 * size), size, color);
+    }
+    for obstacle in &obstacles {
+        match *obstacle {
+            Obstacle::Circle { center, radius } => {
+                gizmos.circle_2d(Isometry2d::from_translation(center), radius, color);
+            }
+            Obstacle::Segment { start, end, radius } => {
+                let normal = (end - start).normalize_or_zero().perp() * radius;
+                gizmos.line_2d(start + normal, end + normal, color);
+                gizmos.line_2d(start - normal, end - normal, color);
+                if radius > 0.0 {
+                    gizmos.circle_2d(Isometry2d::from_translation(start), radius, color);
+                    gizmos.circle_2d(Isometry2d::from_translation(end), radius, color);
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn particle_disc_is_opaque_inside_and_clear_outside() {
+        assert_eq!(disc_alpha(0.0), 1.0);
+        assert_eq!(disc_alpha(0.6), 1.0);
+        assert!(disc_alpha(0.85) > 0.0 && disc_alpha(0.85) < 1.0);
+        assert_eq!(disc_alpha(1.0), 0.0);
+        assert_eq!(disc_alpha(1.4), 0.0);
+    }
+}
