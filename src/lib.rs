@@ -19,7 +19,14 @@
 //! ```
 //!
 //! - [`SphPlugin`](fluid::SphPlugin): the fluid; [`SphParams`](fluid::SphParams) tunes it.
-//! - [`ParticlePlugins`]: every plugin of the crate, as a group.
+//! - [`ParticlePlugins`]: the simulation plugins, as a group (headless-safe).
+//! - `ParticleUiPlugins` (features `render`, `egui`, on by default): sprites tinted through a
+//!   colour map (`render::SphRenderPlugin`), mouse and keyboard tools
+//!   (`interact::SphInteractPlugin`) and the egui tweak panel (`panel::SphPanelPlugin`);
+//!   `demo::SphDemoPlugin` is the `dam_break` example's whole app.
+//! - [`control`]: pause, single-step and reset for every simulation plugin.
+//!
+//! With `--no-default-features` only the simulation is compiled: no window, renderer or egui.
 //!
 //! The pure algorithms ([`fluid::kernels`], [`fluid::grid`], [`fluid::solver`],
 //! [`fluid::boundary`]) have no ECS in them and can be used on their own;

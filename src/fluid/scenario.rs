@@ -1,5 +1,5 @@
 //! Ready-made starting states (dam break, double dam break, a drop into a pool, a resting tank)
-//! that [`ResetSimulation`](crate::control::ResetSimulation) respawns. See
+//! that [`ResetSimulation`] respawns. See
 //! [`SphPlugin`](crate::fluid::SphPlugin).
 
 use super::boundary::Tank;
