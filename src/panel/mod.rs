@@ -20,7 +20,8 @@ use widgets::{color_bar, enum_combo, param_slider};
 /// pointer or keyboard is over the panel, the mouse tools and key bindings ignore it; the
 /// camera keeps the tank in the part of the window the panel leaves free ([`ViewInsets`]).
 ///
-/// Adds [`EguiPlugin`] if the app has none.
+/// Adds [`EguiPlugin`] if the app has none, and a default [`SphScenario`] (the dam break) if the
+/// app has none, for its scenario menu and reset button.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct SphPanelPlugin;
 
@@ -29,7 +30,14 @@ impl Plugin for SphPanelPlugin {
         if !app.is_plugin_added::<EguiPlugin>() {
             app.add_plugins(EguiPlugin::default());
         }
+        // The panel edits these; the other plugins normally create them, but it works alone too.
         app.init_resource::<PanelState>()
+            .init_resource::<SphScenario>()
+            .init_resource::<ParticleView>()
+            .init_resource::<PointerSettings>()
+            .init_resource::<Pointer>()
+            .init_resource::<ViewInsets>()
+            .init_resource::<SimulationControl>()
             .add_systems(PreUpdate, share_input_focus)
             .add_systems(EguiPrimaryContextPass, panel);
     }

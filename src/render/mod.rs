@@ -147,7 +147,7 @@ impl Plugin for SphRenderPlugin {
             .register_type::<PreviousPosition>()
             .init_resource::<ParticleView>()
             .init_resource::<ViewInsets>()
-            .add_systems(Startup, create_particle_texture)
+            .add_systems(PreStartup, create_particle_texture)
             .add_observer(attach_sprite)
             .add_systems(
                 FixedUpdate,
@@ -306,6 +306,7 @@ type SpriteData = (
 /// Interpolated transforms, colours and sizes, in parallel.
 fn update_sprites(
     view: Res<ParticleView>,
+    texture: Option<Res<ParticleTexture>>,
     params: Res<SphParams>,
     fixed: Res<Time<Fixed>>,
     mut table: Local<Option<(ColorMap, ColorTable)>>,
@@ -324,6 +325,7 @@ fn update_sprites(
     };
     let size = Some(Vec2::splat(view.sprite_scale * params.particle_spacing));
     let view = &*view;
+    let texture = texture.as_deref().map(|t| &t.0);
     particles.par_iter_mut().for_each(
         |(position, previous, velocity, density, pressure, mut transform, mut sprite)| {
             let at = previous.0.lerp(position.0, alpha).extend(0.0);
@@ -339,6 +341,12 @@ fn update_sprites(
             if sprite.color != color || sprite.custom_size != size {
                 sprite.color = color;
                 sprite.custom_size = size;
+            }
+            // A particle spawned before the texture existed.
+            if let Some(texture) = texture
+                && sprite.image != *texture
+            {
+                sprite.image = texture.clone();
             }
         },
     );
