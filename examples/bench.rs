@@ -1,13 +1,20 @@
 //! Headless benchmark: a dam break of N particles, stepped K times on plain slices (rayon) and
-//! through the ECS (`par_iter_mut`), in the same process, on T threads.
+//! through the ECS (`par_iter_mut`), in the same process, on T threads; or, with `--gravity`,
+//! Barnes-Hut gravity on a disc of N bodies around a heavy centre.
 //!
 //! ```text
 //! cargo run --release --example bench -- --particles 100000 --steps 200 --threads 2
+//! cargo run --release --example bench -- --gravity --bodies 1000000 --steps 5 --threads 2 --theta 1
 //! ```
-//! The last two lines read
+//! The fluid's last two lines read
 //! `path=slices|ecs particles=N steps=K threads=T neighbours=X ms_per_step=Y particle_steps_per_s=Z`,
 //! where a step is one solver sub-step and `neighbours` the mean number of particles within the
 //! kernel support (the particle itself and wall particles included).
+//!
+//! Gravity's last line reads
+//! `bodies=N steps=K threads=T theta=X ms_per_step=Y body_steps_per_s=Z`, a step being one fixed
+//! tick through the ECS: leapfrog kick and drift, tree build, field evaluation, kick. Up to 20,000
+//! bodies a line starting `direct` gives exact direct summation on the same bodies before it.
 
 mod support;
 
@@ -22,7 +29,13 @@ use support::{Args, fail};
 const USAGE: &str = "\
 usage: bench --particles N --steps K [--threads T] [--support-ratio R] [--kernel wendland|cubic|muller]
   a dam break (column 1:2, tank 4 columns wide) of about N particles at 5 mm spacing,
-  K sub-steps on each path after 10 warm-up steps";
+  K sub-steps on each path after 10 warm-up steps
+usage: bench --gravity --bodies N --steps K [--threads T] [--theta X]
+  Barnes-Hut gravity on a disc of N bodies around a heavy centre (G = 1, radius 1 m),
+  K fixed ticks through the ECS after one warm-up tick";
+
+/// Largest body count for which the direct-sum comparison runs.
+const DIRECT_LIMIT: usize = 20_000;
 
 /// Sub-steps per ECS tick: enough that per-tick work (statistics) is amortised as in a game.
 const SUBSTEPS_PER_TICK: u32 = 10;
@@ -30,10 +43,22 @@ const WARM_UP: usize = 10;
 
 fn main() {
     let args = Args::parse(
-        &["particles", "steps", "threads", "support-ratio", "kernel"],
-        &[],
+        &[
+            "particles",
+            "steps",
+            "threads",
+            "support-ratio",
+            "kernel",
+            "bodies",
+            "theta",
+        ],
+        &["gravity"],
     )
     .unwrap_or_else(|e| fail(&e, USAGE));
+    if args.flag("gravity") {
+        gravity_bench(&args);
+        return;
+    }
     let run = || -> Result<(usize, usize, usize, SphParams), String> {
         let particles: usize = args.get("particles", 100_000)?;
         let steps: usize = args.get("steps", 100)?;
@@ -139,4 +164,85 @@ fn main() {
     );
     line("slices", steps, slices_seconds);
     line("ecs", ecs_steps, ecs_seconds);
+}
+
+/// Seconds per tick of the gravity plugin on a galaxy disc of `bodies` bodies.
+fn time_gravity(bodies: usize, steps: usize, threads: usize, params: GravityParams) -> f64 {
+    let mut app = App::new();
+    app.add_plugins((
+        MinimalPlugins.set(bevy_sph2d::task_pool_plugin(threads)),
+        GravityPlugin::default().with_params(params),
+    ))
+    .insert_resource(Time::<Fixed>::from_duration(Duration::from_millis(1)))
+    .insert_resource(TimeUpdateStrategy::FixedTimesteps(1));
+    app.world_mut().commands().queue(GalaxyDisc::new(bodies));
+    // Start the clocks, then one warm-up tick (it also evaluates the new bodies' field).
+    app.update();
+    app.update();
+    let started = Instant::now();
+    for _ in 0..steps {
+        app.update();
+    }
+    let seconds = started.elapsed().as_secs_f64() / steps as f64;
+    let stats = app.world().resource::<GravityStats>();
+    assert_eq!(stats.bodies, bodies, "the ECS lost bodies");
+    eprintln!(
+        "{} bodies, {} nodes, field {:.1} ms of {:.1} ms per tick",
+        stats.bodies,
+        stats.nodes,
+        stats.field_ms,
+        1000.0 * seconds
+    );
+    seconds
+}
+
+fn gravity_bench(args: &Args) {
+    let run = || -> Result<(usize, usize, usize, f32), String> {
+        let bodies: usize = args.get("bodies", 100_000)?;
+        let steps: usize = args.get("steps", 10)?;
+        let threads: usize = args.get("threads", 2)?;
+        let theta: f32 = args.get("theta", 1.0)?;
+        if bodies == 0 || steps == 0 || threads == 0 {
+            return Err("--bodies, --steps and --threads must be positive".into());
+        }
+        Ok((bodies, steps, threads, theta))
+    };
+    let (bodies, steps, threads, theta) = run().unwrap_or_else(|e| fail(&e, USAGE));
+    let params = GravityParams {
+        gravitational_constant: 1.0,
+        theta,
+        softening: 0.001,
+        ..default()
+    };
+    if let Err(error) = params.validate() {
+        fail(&error.to_string(), USAGE);
+    }
+    // The tree build's sort and top levels run on rayon: give it the same thread count.
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .expect("rayon pool");
+    pool.install(|| {
+        if bodies <= DIRECT_LIMIT {
+            let direct_steps = steps.min(3);
+            let direct = GravityParams {
+                direct_sum: true,
+                ..params.clone()
+            };
+            let seconds = time_gravity(bodies, direct_steps, threads, direct);
+            println!(
+                "direct bodies={bodies} steps={direct_steps} threads={threads} \
+                 ms_per_step={:.3} body_steps_per_s={:.0}",
+                1000.0 * seconds,
+                bodies as f64 / seconds
+            );
+        }
+        let seconds = time_gravity(bodies, steps, threads, params.clone());
+        println!(
+            "bodies={bodies} steps={steps} threads={threads} theta={theta} ms_per_step={:.3} \
+             body_steps_per_s={:.0}",
+            1000.0 * seconds,
+            bodies as f64 / seconds
+        );
+    });
 }

@@ -19,6 +19,9 @@
 //! ```
 //!
 //! - [`SphPlugin`](fluid::SphPlugin): the fluid; [`SphParams`](fluid::SphParams) tunes it.
+//! - [`GravityPlugin`](gravity::GravityPlugin): Barnes-Hut gravity between every entity with a
+//!   [`Mass`](gravity::Mass), fluid particles included; [`GravityParams`](gravity::GravityParams)
+//!   tunes it.
 //! - [`ParticlePlugins`]: the simulation plugins, as a group (headless-safe).
 //! - `ParticleUiPlugins` (features `render`, `egui`, on by default): sprites tinted through a
 //!   colour map (`render::SphRenderPlugin`), mouse and keyboard tools
@@ -38,6 +41,7 @@ pub mod control;
 #[cfg(feature = "egui")]
 pub mod demo;
 pub mod fluid;
+pub mod gravity;
 #[cfg(feature = "render")]
 pub mod interact;
 #[cfg(feature = "egui")]
@@ -90,7 +94,9 @@ pub struct ParticlePlugins;
 
 impl PluginGroup for ParticlePlugins {
     fn build(self) -> PluginGroupBuilder {
-        PluginGroupBuilder::start::<Self>().add(fluid::SphPlugin::default())
+        PluginGroupBuilder::start::<Self>()
+            .add(fluid::SphPlugin::default())
+            .add(gravity::GravityPlugin::default())
     }
 }
 
@@ -124,6 +130,9 @@ pub mod prelude {
         Acceleration, Density, FluidBlock, FluidParticle, KernelKind, Obstacle, Position, Pressure,
         ScenarioKind, SphParams, SphParamsStatus, SphPlugin, SphScenario, SphStats, SphSubstep,
         SphSubstepSystems, SphSystems, Tank, Velocity,
+    };
+    pub use crate::gravity::{
+        GalaxyDisc, GravityParams, GravityPlugin, GravityStats, GravitySystems, Mass,
     };
     #[cfg(feature = "render")]
     pub use crate::interact::{PointerSettings, PointerTool, SphInteractPlugin};

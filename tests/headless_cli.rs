@@ -159,3 +159,42 @@ fn tank_scenario_writes_hydrostatic_pressure() {
     }
     assert!(checked >= 30);
 }
+
+#[test]
+fn galaxy_scenario_writes_gravity_frames() {
+    let (header, rows) = record(
+        "galaxy",
+        &[
+            "--scenario",
+            "galaxy",
+            "--bodies",
+            "300",
+            "--theta",
+            "0.5",
+            "--steps",
+            "10",
+            "--frame-steps",
+            "5",
+        ],
+    );
+    assert_eq!(header, "time,id,x,y,vx,vy,ax,ay,mass,density,pressure");
+    // Frames at steps 0, 5 and 10.
+    assert_eq!(rows.len(), 3 * 300);
+    assert!(rows.iter().flatten().all(|v| v.is_finite()));
+    // Bodies in the disc fall towards the centre: the acceleration points inwards.
+    let inward = rows[1..300]
+        .iter()
+        .filter(|r| r[2] * r[6] + r[3] * r[7] < 0.0)
+        .count();
+    assert!(inward > 290, "{inward} of 299 accelerations point inwards");
+    let times: Vec<f64> = rows.iter().map(|r| r[0]).step_by(300).collect();
+    assert_eq!(times, vec![0.0, 0.01, 0.02]);
+    for args in [
+        &["--scenario", "galaxy", "--bodies", "0"][..],
+        &["--scenario", "galaxy", "--theta", "-1"],
+        &["--scenario", "galaxy", "--dt", "0"],
+    ] {
+        let out = run(args);
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+    }
+}

@@ -155,29 +155,31 @@ impl Plugin for SphPlugin {
             .init_resource::<SphStats>()
             .init_resource::<SphParamsStatus>();
 
-        let mut substep = Schedule::new(SphSubstep);
-        substep.set_executor(SingleThreadedExecutor::new());
-        substep.configure_sets(
-            (
-                SphSubstepSystems::Neighbors,
-                SphSubstepSystems::Density,
-                SphSubstepSystems::Forces,
-                SphSubstepSystems::ExternalForces,
-                SphSubstepSystems::Integrate,
-            )
-                .chain(),
-        );
-        substep.add_systems((
-            systems::build_neighbor_grid.in_set(SphSubstepSystems::Neighbors),
-            (systems::compute_density, systems::compute_wall_pressure)
-                .chain()
-                .in_set(SphSubstepSystems::Density),
-            systems::compute_forces.in_set(SphSubstepSystems::Forces),
-            (systems::choose_time_step, systems::integrate_particles)
-                .chain()
-                .in_set(SphSubstepSystems::Integrate),
-        ));
-        app.add_schedule(substep);
+        // Edited rather than replaced: other plugins (gravity) may have added systems to it.
+        app.init_schedule(SphSubstep);
+        app.edit_schedule(SphSubstep, |substep| {
+            substep.set_executor(SingleThreadedExecutor::new());
+            substep.configure_sets(
+                (
+                    SphSubstepSystems::Neighbors,
+                    SphSubstepSystems::Density,
+                    SphSubstepSystems::Forces,
+                    SphSubstepSystems::ExternalForces,
+                    SphSubstepSystems::Integrate,
+                )
+                    .chain(),
+            );
+            substep.add_systems((
+                systems::build_neighbor_grid.in_set(SphSubstepSystems::Neighbors),
+                (systems::compute_density, systems::compute_wall_pressure)
+                    .chain()
+                    .in_set(SphSubstepSystems::Density),
+                systems::compute_forces.in_set(SphSubstepSystems::Forces),
+                (systems::choose_time_step, systems::integrate_particles)
+                    .chain()
+                    .in_set(SphSubstepSystems::Integrate),
+            ));
+        });
 
         app.configure_sets(
             self.schedule,

@@ -22,15 +22,18 @@ pub enum ScenarioKind {
     DropIntoPool,
     /// A resting layer 0.4 of the tank deep, to tilt and stir.
     Tank,
+    /// No fluid (for scenes of gravity bodies alone).
+    Empty,
 }
 
 impl ScenarioKind {
     /// Every kind, in menu order.
-    pub const ALL: [ScenarioKind; 4] = [
+    pub const ALL: [ScenarioKind; 5] = [
         ScenarioKind::DamBreak,
         ScenarioKind::DoubleDamBreak,
         ScenarioKind::DropIntoPool,
         ScenarioKind::Tank,
+        ScenarioKind::Empty,
     ];
 
     /// A human-readable name.
@@ -40,6 +43,7 @@ impl ScenarioKind {
             ScenarioKind::DoubleDamBreak => "Double dam break",
             ScenarioKind::DropIntoPool => "Drop into a pool",
             ScenarioKind::Tank => "Tank",
+            ScenarioKind::Empty => "No fluid",
         }
     }
 }
@@ -109,6 +113,7 @@ impl SphScenario {
                 ]
             }
             ScenarioKind::Tank => vec![block(0.0, 0.0, 1.0, 0.4)],
+            ScenarioKind::Empty => Vec::new(),
         };
         blocks
             .into_iter()
@@ -120,6 +125,9 @@ impl SphScenario {
     /// The spacing (m) at which the blocks in `tank` hold about [`particles`](Self::particles).
     pub fn spacing(&self, tank: &Tank) -> f32 {
         let area: f32 = self.blocks(tank).iter().map(|b| b.size.x * b.size.y).sum();
+        if area <= 0.0 {
+            return tank.width.min(tank.height) / 50.0;
+        }
         (area / self.particles.max(16) as f32).sqrt()
     }
 
@@ -148,6 +156,9 @@ pub(crate) fn reset_scenario(
     for entity in &particles {
         commands.entity(entity).despawn();
     }
+    if scenario.kind == ScenarioKind::Empty {
+        return;
+    }
     let tank = SphScenario::tank(&params);
     let spacing = scenario.spacing(&tank);
     let mut candidate = params.clone();
@@ -175,7 +186,10 @@ mod tests {
     #[test]
     fn spacing_gives_the_particle_count() {
         let tank = SCENARIO_TANK;
-        for kind in ScenarioKind::ALL {
+        for kind in ScenarioKind::ALL
+            .into_iter()
+            .filter(|k| *k != ScenarioKind::Empty)
+        {
             let scenario = SphScenario::new(kind, 3000);
             let spacing = scenario.spacing(&tank);
             let count: usize = scenario

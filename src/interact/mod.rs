@@ -4,11 +4,12 @@
 
 pub mod tools;
 
-use crate::control::{ResetSimulation, SimulationControl};
+use crate::control::{ResetSimulation, SimulationControl, simulation_running};
 use crate::fluid::{
     Acceleration, FluidParticle, Position, SphParams, SphSubstep, SphSubstepSystems, SphSystems,
     Velocity,
 };
+use crate::gravity::{GravityAcceleration, GravitySystems, Mass};
 use crate::render::{SphCamera, cursor_to_world};
 use bevy::input::mouse::AccumulatedMouseScroll;
 use bevy::prelude::*;
@@ -23,7 +24,7 @@ pub use tools::{PointerAction, PointerForce, falloff, nozzle_row, tilted_gravity
 /// changes the radius. The tool's circle is drawn with gizmos.
 ///
 /// Keyboard: `Space` pauses, `.` runs a single tick, `R` resets the scenario, `←`/`→` tilt the
-/// tank (turn gravity), `↑` levels it, `1`–`4` pick the tool.
+/// tank (turn gravity), `↑` levels it, `1`–`5` pick the tool.
 ///
 /// The cursor is read each frame before the fixed steps
 /// ([`RunFixedMainLoopSystems::BeforeFixedMainLoop`]) into [`Pointer`]; the fixed step applies
@@ -44,15 +45,18 @@ pub enum PointerTool {
     Pour,
     /// Remove particles under the cursor.
     Erase,
+    /// Spawn gravity bodies at the cursor, moving with it.
+    Bodies,
 }
 
 impl PointerTool {
-    /// Every tool, in menu order (keys `1`–`4`).
-    pub const ALL: [PointerTool; 4] = [
+    /// Every tool, in menu order (keys `1`–`5`).
+    pub const ALL: [PointerTool; 5] = [
         PointerTool::Pull,
         PointerTool::Drag,
         PointerTool::Pour,
         PointerTool::Erase,
+        PointerTool::Bodies,
     ];
 
     /// The tool's name.
@@ -62,6 +66,7 @@ impl PointerTool {
             PointerTool::Drag => "Drag",
             PointerTool::Pour => "Pour",
             PointerTool::Erase => "Erase",
+            PointerTool::Bodies => "Spawn bodies",
         }
     }
 }
@@ -86,6 +91,10 @@ pub struct PointerSettings {
     pub tilt_rate: f32,
     /// Largest tilt, rad.
     pub max_tilt: f32,
+    /// Mass of each spawned body, kg.
+    pub body_mass: f32,
+    /// Bodies spawned per fixed tick while the button is held.
+    pub bodies_per_tick: u32,
 }
 
 impl Default for PointerSettings {
@@ -99,6 +108,8 @@ impl Default for PointerSettings {
             max_particles: 20_000,
             tilt_rate: 0.8,
             max_tilt: 1.0,
+            body_mass: 1.0e-4,
+            bodies_per_tick: 4,
         }
     }
 }
@@ -148,9 +159,16 @@ impl Plugin for SphInteractPlugin {
             )
             .add_systems(
                 FixedUpdate,
-                (pour_particles, erase_particles)
-                    .chain()
-                    .in_set(SphInteractSystems),
+                (
+                    (pour_particles, erase_particles, spawn_bodies)
+                        .chain()
+                        .run_if(simulation_running)
+                        .in_set(SphInteractSystems),
+                    push_bodies
+                        .run_if(simulation_running)
+                        .after(GravitySystems::Field)
+                        .before(GravitySystems::Kick),
+                ),
             )
             .add_systems(
                 SphSubstep,
@@ -212,7 +230,11 @@ fn track_pointer(
         (true, _, PointerTool::Drag) => PointerAction::Drag,
         _ => PointerAction::None,
     };
-    pointer.tool_active = left && matches!(settings.tool, PointerTool::Pour | PointerTool::Erase);
+    pointer.tool_active = left
+        && matches!(
+            settings.tool,
+            PointerTool::Pour | PointerTool::Erase | PointerTool::Bodies
+        );
     pointer.force = PointerForce {
         action,
         center: world.unwrap_or_default(),
@@ -316,7 +338,66 @@ fn erase_particles(
     }
 }
 
-/// Space, `.`, `R`, arrows and `1`–`4`.
+/// Spawns bodies around the cursor while the body tool is held, moving with the cursor.
+fn spawn_bodies(
+    pointer: Res<Pointer>,
+    settings: Res<PointerSettings>,
+    mut tick: Local<u64>,
+    mut commands: Commands,
+) {
+    let (Some(center), true) = (pointer.world, pointer.tool_active) else {
+        return;
+    };
+    if settings.tool != PointerTool::Bodies {
+        return;
+    }
+    *tick += 1;
+    let count = settings.bodies_per_tick.min(1000);
+    let velocity = pointer.velocity;
+    let radius = settings.radius;
+    let mass = settings.body_mass.max(0.0);
+    let seed = *tick;
+    commands.spawn_batch(
+        (0..count)
+            .map(move |i| {
+                // A golden-angle spiral inside the radius, turned a little every tick.
+                let k = i as f32 + 0.5;
+                let r = radius * (k / count as f32).sqrt();
+                let angle = k * 2.399_963 + seed as f32 * 0.618;
+                (
+                    Mass(mass),
+                    Position(center + r * Vec2::from_angle(angle)),
+                    Velocity(velocity),
+                )
+            })
+            .collect::<Vec<_>>(),
+    );
+}
+
+/// What the pointer pushes: gravity bodies' position, velocity and acceleration.
+type FreeBody = (
+    &'static Position,
+    &'static Velocity,
+    &'static mut GravityAcceleration,
+);
+
+/// The pointer's force on gravity bodies (fluid particles get it in the fluid's sub-steps).
+fn push_bodies(
+    pointer: Res<Pointer>,
+    mut bodies: Query<FreeBody, (With<Mass>, Without<FluidParticle>)>,
+) {
+    let force = pointer.force;
+    if force.action == PointerAction::None {
+        return;
+    }
+    bodies
+        .par_iter_mut()
+        .for_each(|(position, velocity, mut acceleration)| {
+            acceleration.0 += force.acceleration(position.0, velocity.0);
+        });
+}
+
+/// Space, `.`, `R`, arrows and `1`–`5`.
 fn keyboard_controls(
     keys: Res<ButtonInput<KeyCode>>,
     time: Res<Time<Real>>,
@@ -343,6 +424,7 @@ fn keyboard_controls(
         KeyCode::Digit2,
         KeyCode::Digit3,
         KeyCode::Digit4,
+        KeyCode::Digit5,
     ]
     .into_iter()
     .zip(PointerTool::ALL)
@@ -387,6 +469,7 @@ fn draw_pointer(pointer: Res<Pointer>, settings: Res<PointerSettings>, mut gizmo
         (PointerAction::Drag, ..) => Color::srgb(1.0, 0.85, 0.3),
         (_, PointerTool::Pour, true) => Color::srgb(0.4, 0.7, 1.0),
         (_, PointerTool::Erase, true) => Color::srgb(1.0, 0.3, 0.9),
+        (_, PointerTool::Bodies, true) => Color::srgb(1.0, 0.7, 0.2),
         _ => Color::srgba(1.0, 1.0, 1.0, 0.6),
     };
     gizmos.circle_2d(Isometry2d::from_translation(center), settings.radius, color);

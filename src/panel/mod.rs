@@ -5,8 +5,9 @@ mod widgets;
 
 use crate::control::{ResetSimulation, SimulationControl};
 use crate::fluid::{KernelKind, ScenarioKind, SphParams, SphParamsStatus, SphScenario, SphStats};
+use crate::gravity::{GravityParams, GravityStats};
 use crate::interact::{Pointer, PointerSettings, PointerTool};
-use crate::render::{ColorMap, ParticleView, RenderMode, ViewInsets};
+use crate::render::{BodyColor, BodyView, ColorMap, ParticleView, RenderMode, ViewInsets};
 use bevy::prelude::*;
 use bevy_egui::input::EguiWantsInput;
 use bevy_egui::{EguiContexts, EguiPlugin, EguiPrimaryContextPass, egui};
@@ -117,6 +118,9 @@ struct PanelData<'w> {
     state: ResMut<'w, PanelState>,
     time: Res<'w, Time<Real>>,
     keys: Res<'w, ButtonInput<KeyCode>>,
+    gravity: Option<ResMut<'w, GravityParams>>,
+    gravity_stats: Option<Res<'w, GravityStats>>,
+    bodies: Option<ResMut<'w, BodyView>>,
 }
 
 fn panel(
@@ -151,6 +155,7 @@ fn panel(
                 stats_section(ui, &data, &stats);
                 scenario_section(ui, &mut data, &mut resets);
                 fluid_section(ui, &mut data);
+                gravity_section(ui, &mut data);
                 render_section(ui, &mut data);
                 tools_section(ui, &mut data);
             });
@@ -191,7 +196,7 @@ fn controls_section(
             resets.write(ResetSimulation);
         }
     });
-    ui.small("Mouse: left = tool, right = push, wheel = radius. Left/Right arrows tilt, Up levels, 1–4 tools, Tab hides the panel.");
+    ui.small("Mouse: left = tool, right = push, wheel = radius. Left/Right arrows tilt, Up levels, 1–5 tools, Tab hides the panel.");
 }
 
 fn stats_section(ui: &mut egui::Ui, data: &PanelData, stats: &SphStats) {
@@ -426,6 +431,57 @@ fn fluid_section(ui: &mut egui::Ui, data: &mut PanelData) {
         });
 }
 
+fn gravity_section(ui: &mut egui::Ui, data: &mut PanelData) {
+    let (Some(gravity), Some(stats)) = (data.gravity.as_mut(), data.gravity_stats.as_ref()) else {
+        return;
+    };
+    egui::CollapsingHeader::new("Gravity (Barnes-Hut)")
+        .default_open(stats.bodies > 0)
+        .show(ui, |ui| {
+            let mut g = (**gravity).clone();
+            ui.add(
+                egui::Slider::new(&mut g.gravitational_constant, 1.0e-12..=1.0e3)
+                    .logarithmic(true)
+                    .text("G (m³/(kg·s²))"),
+            );
+            param_slider(ui, &mut g.theta, 0.0..=1.5, "opening angle θ", "", false);
+            param_slider(ui, &mut g.softening, 0.0..=0.2, "softening ε", "m", false);
+            ui.add(egui::Slider::new(&mut g.leaf_capacity, 1..=64).text("leaf capacity"));
+            ui.checkbox(&mut g.direct_sum, "exact direct sum (O(n²), for checking)");
+            if g != **gravity {
+                **gravity = g;
+            }
+            egui::Grid::new("gravity_stats")
+                .num_columns(2)
+                .show(ui, |ui| {
+                    let mut row = |name: &str, value: String| {
+                        ui.label(name);
+                        ui.monospace(value);
+                        ui.end_row();
+                    };
+                    row("bodies", format!("{}", stats.bodies));
+                    row("tree nodes", format!("{}", stats.nodes));
+                    row("tree + field", format!("{:.1} ms", stats.field_ms));
+                    row("kinetic energy", format!("{:.4e} J", stats.kinetic_energy));
+                    row(
+                        "potential energy",
+                        format!("{:.4e} J", stats.potential_energy),
+                    );
+                    row("total energy", format!("{:.4e} J", stats.total_energy()));
+                    row(
+                        "momentum",
+                        format!(
+                            "({:.3e}, {:.3e}) kg·m/s",
+                            stats.momentum.x, stats.momentum.y
+                        ),
+                    );
+                });
+            if let Some(error) = &stats.error {
+                ui.colored_label(egui::Color32::LIGHT_RED, format!("refused: {error}"));
+            }
+        });
+}
+
 fn render_section(ui: &mut egui::Ui, data: &mut PanelData) {
     egui::CollapsingHeader::new("Rendering")
         .default_open(true)
@@ -461,6 +517,37 @@ fn render_section(ui: &mut egui::Ui, data: &mut PanelData) {
             ui.checkbox(&mut view.outline, "outline tank and obstacles");
             if view != *data.view {
                 *data.view = view;
+            }
+            if let Some(bodies) = data.bodies.as_mut() {
+                ui.separator();
+                ui.label("gravity bodies");
+                let mut b = (**bodies).clone();
+                enum_combo(
+                    ui,
+                    "colour bodies by",
+                    &mut b.color_by,
+                    &[BodyColor::Speed, BodyColor::Mass],
+                    |c| match c {
+                        BodyColor::Speed => "Speed",
+                        BodyColor::Mass => "Mass",
+                    },
+                );
+                enum_combo(
+                    ui,
+                    "body colour map",
+                    &mut b.color_map,
+                    &ColorMap::ALL,
+                    |m| m.label(),
+                );
+                let unit = match b.color_by {
+                    BodyColor::Speed => "m/s",
+                    BodyColor::Mass => "kg",
+                };
+                color_bar(ui, b.color_map, b.range, unit);
+                param_slider(ui, &mut b.size, 0.001..=0.2, "body size", "m", true);
+                if b != **bodies {
+                    **bodies = b;
+                }
             }
         });
 }

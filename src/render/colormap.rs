@@ -72,10 +72,19 @@ impl ColorMap {
     /// A table of `len` (at least 2) evenly spaced colours, low end first, for mapping many
     /// values quickly.
     pub fn table(self, len: usize) -> ColorTable {
+        self.table_between(0.0, 1.0, len)
+    }
+
+    /// A table of `len` colours evenly spaced over the part `low..=high` of the map (e.g. to
+    /// skip a map's near-black end on a dark background).
+    pub fn table_between(self, low: f32, high: f32, len: usize) -> ColorTable {
         let len = len.max(2);
         ColorTable {
             colors: (0..len)
-                .map(|i| self.sample(i as f32 / (len - 1) as f32).to_linear())
+                .map(|i| {
+                    let t = i as f32 / (len - 1) as f32;
+                    self.sample(low + (high - low) * t).to_linear()
+                })
                 .collect(),
         }
     }

@@ -2,6 +2,7 @@
 //! or pressure, moved smoothly between fixed steps; a camera that keeps the tank in view. See
 //! [`SphRenderPlugin`].
 
+pub mod bodies;
 pub mod colormap;
 pub mod view;
 
@@ -12,6 +13,7 @@ use bevy::asset::RenderAssetUsages;
 use bevy::prelude::*;
 use bevy::render::render_resource::{Extent3d, TextureDimension, TextureFormat};
 
+pub use bodies::{BodyColor, BodyView};
 pub use colormap::{ColorMap, ColorRange, ColorTable};
 pub use view::{SphCamera, ViewInsets, cursor_to_world, fit_tank};
 
@@ -27,7 +29,9 @@ pub use view::{SphCamera, ViewInsets, cursor_to_world, fit_tank};
 ///   range that follows the data (quantiles, eased between frames) or is set by hand;
 /// - cameras with [`SphCamera`] are fitted to the tank in the window area that
 ///   [`ViewInsets`] leaves free, so the tank fills the window at any size;
-/// - the tank walls and [`Obstacle`]s are outlined with gizmos.
+/// - the tank walls and [`Obstacle`]s are outlined with gizmos;
+/// - gravity bodies that are not fluid particles get sprites too, tinted by speed or mass
+///   ([`BodyView`]).
 #[derive(Debug, Clone, Copy, Default)]
 pub struct SphRenderPlugin;
 
@@ -144,6 +148,9 @@ pub enum SphRenderSystems {
 impl Plugin for SphRenderPlugin {
     fn build(&self, app: &mut App) {
         app.register_type::<ParticleView>()
+            .register_type::<BodyView>()
+            .init_resource::<BodyView>()
+            .add_observer(bodies::attach_body_sprite)
             .register_type::<PreviousPosition>()
             .init_resource::<ParticleView>()
             .init_resource::<ViewInsets>()
@@ -163,7 +170,11 @@ impl Plugin for SphRenderPlugin {
                 RunFixedMainLoop,
                 (
                     view::fit_cameras.in_set(SphRenderSystems::Camera),
-                    (update_color_range, update_sprites)
+                    (
+                        update_color_range,
+                        update_sprites,
+                        bodies::update_body_sprites,
+                    )
                         .chain()
                         .in_set(SphRenderSystems::Sprites),
                 ),

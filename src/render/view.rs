@@ -16,6 +16,8 @@ pub struct SphCamera {
     pub margin: f32,
     /// Fit the camera every frame (turn off to pan and zoom it yourself).
     pub fit: bool,
+    /// The world region to show, m; `None` shows the fluid's tank.
+    pub region: Option<Rect>,
 }
 
 impl Default for SphCamera {
@@ -23,6 +25,7 @@ impl Default for SphCamera {
         Self {
             margin: 0.04,
             fit: true,
+            region: None,
         }
     }
 }
@@ -83,16 +86,18 @@ pub(crate) fn fit_cameras(
     window: Single<&Window, With<PrimaryWindow>>,
     mut cameras: Query<(&SphCamera, &mut Projection, &mut Transform)>,
 ) {
-    let Some(tank) = params.tank else {
-        return;
-    };
     let window_size = Vec2::new(window.width(), window.height());
     for (camera, mut projection, mut transform) in &mut cameras {
+        let region = match (camera.region, params.tank) {
+            (Some(region), _) => region,
+            (None, Some(tank)) => Rect::new(0.0, 0.0, tank.width, tank.height),
+            (None, None) => continue,
+        };
         if !camera.fit {
             continue;
         }
-        let margin = camera.margin.max(0.0) * tank.width.max(tank.height);
-        let region = Rect::new(-margin, -margin, tank.width + margin, tank.height + margin);
+        let margin = camera.margin.max(0.0) * region.width().max(region.height());
+        let region = region.inflate(margin);
         let Some((centre, scale)) = fit_tank(region, window_size, *insets) else {
             continue;
         };

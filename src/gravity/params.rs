@@ -1,0 +1,131 @@
+//! Runtime-tunable gravity parameters and their validation. See
+//! [`GravityPlugin`](crate::gravity::GravityPlugin).
+
+use bevy::prelude::*;
+use core::fmt;
+
+/// Barnes-Hut gravity parameters. Edit them at any time; every change is validated and a bad one
+/// is refused (the plugin keeps the last valid values and says why in [`GravityStats`]).
+///
+/// [`GravityStats`]: crate::gravity::GravityStats
+#[derive(Resource, Reflect, Debug, Clone, PartialEq)]
+#[reflect(Resource, Default, Debug, PartialEq)]
+pub struct GravityParams {
+    /// Gravitational constant `G`, m³/(kg·s²) (nature's is 6.674e-11; games use far larger).
+    pub gravitational_constant: f32,
+    /// Opening angle θ, 0–2: a tree node of width `w` at distance `d` counts as one mass when
+    /// `w/d < θ`. Smaller is more accurate and slower; 0 sums every pair.
+    pub theta: f32,
+    /// Plummer softening length ε, m: keeps close encounters finite.
+    pub softening: f32,
+    /// Most bodies in a leaf of the tree (1–64).
+    pub leaf_capacity: u32,
+    /// Sum every pair exactly (O(n²)) instead of using the tree: for checking.
+    pub direct_sum: bool,
+}
+
+impl Default for GravityParams {
+    fn default() -> Self {
+        Self {
+            gravitational_constant: 6.674e-11,
+            theta: 0.7,
+            softening: 0.01,
+            leaf_capacity: 8,
+            direct_sum: false,
+        }
+    }
+}
+
+/// Why a [`GravityParams`] value was refused: the field and what is wrong with it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct GravityParamsError {
+    /// The field's name.
+    pub field: &'static str,
+    /// What is wrong, with the value and the accepted range.
+    pub message: String,
+}
+
+impl fmt::Display for GravityParamsError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "GravityParams::{}: {}", self.field, self.message)
+    }
+}
+
+impl std::error::Error for GravityParamsError {}
+
+impl GravityParams {
+    /// Checks every field; the first problem is returned with the field, value and range.
+    pub fn validate(&self) -> Result<(), GravityParamsError> {
+        let check = |field: &'static str, value: f32, min: f32, max: f32, unit: &str| {
+            if value.is_finite() && value >= min && value <= max {
+                Ok(())
+            } else {
+                Err(GravityParamsError {
+                    field,
+                    message: format!("{value} {unit} is outside {min}..={max} {unit}"),
+                })
+            }
+        };
+        check(
+            "gravitational_constant",
+            self.gravitational_constant,
+            0.0,
+            1.0e12,
+            "m³/(kg·s²)",
+        )?;
+        check("theta", self.theta, 0.0, 2.0, "")?;
+        check("softening", self.softening, 0.0, 1.0e9, "m")?;
+        if !(1..=64).contains(&self.leaf_capacity) {
+            return Err(GravityParamsError {
+                field: "leaf_capacity",
+                message: format!("{} is outside 1..=64", self.leaf_capacity),
+            });
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_pass_and_bad_values_name_their_field() {
+        assert_eq!(GravityParams::default().validate(), Ok(()));
+        let bad = [
+            (
+                "gravitational_constant",
+                GravityParams {
+                    gravitational_constant: -1.0,
+                    ..default()
+                },
+            ),
+            (
+                "theta",
+                GravityParams {
+                    theta: f32::NAN,
+                    ..default()
+                },
+            ),
+            (
+                "softening",
+                GravityParams {
+                    softening: -0.1,
+                    ..default()
+                },
+            ),
+            (
+                "leaf_capacity",
+                GravityParams {
+                    leaf_capacity: 0,
+                    ..default()
+                },
+            ),
+        ];
+        for (field, params) in bad {
+            let error = params.validate().unwrap_err();
+            assert_eq!(error.field, field);
+            assert!(error.to_string().contains(field));
+        }
+    }
+}

@@ -1,0 +1,611 @@
+//! Pure Barnes-Hut quadtree: bodies sorted along a Morton (Z-order) curve, nodes in flat arrays
+//! in depth-first order with skip links (no per-node allocation, no recursion when querying),
+//! centre of mass per node, and the opening test "node width / distance < θ". See
+//! [`GravityPlugin`](crate::gravity::GravityPlugin).
+
+use bevy::math::Vec2;
+use rayon::prelude::*;
+
+/// Bits of each coordinate in a Morton code: cells down to 2⁻²⁴ of the bounding square.
+const BITS: u32 = 24;
+
+/// Bodies per parallel task when sorting and building subtrees.
+const PARALLEL_BODIES: usize = 16_384;
+
+/// Most bodies in a group that shares one interaction list in [`QuadTree::fields`].
+const GROUP_SIZE: u32 = 32;
+
+/// One node of the tree. Children follow their parent directly (depth-first order); `next` is
+/// the index after the node's whole subtree, so a query skips a subtree in one step.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Node {
+    /// Centre of mass, m.
+    pub center_of_mass: Vec2,
+    /// Total mass, kg.
+    pub mass: f32,
+    /// Lower-left corner of the node's square, m.
+    pub min: Vec2,
+    /// Side of the node's square, m.
+    pub width: f32,
+    /// Index of the first node after this subtree.
+    pub next: u32,
+    /// First body of the node, in sorted order.
+    pub first: u32,
+    /// Bodies in the node.
+    pub count: u32,
+    /// A leaf holds its bodies directly; an inner node's children follow it.
+    pub leaf: bool,
+}
+
+/// The acceleration and potential at a point, from [`QuadTree::field_at`].
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Field {
+    /// Acceleration, m/s².
+    pub acceleration: Vec2,
+    /// Gravitational potential per unit mass, J/kg (bodies at exactly the query point are left
+    /// out, so a body does not count its own mass).
+    pub potential: f32,
+}
+
+/// Constants of a gravity query.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Gravity {
+    /// Gravitational constant `G`, m³/(kg·s²).
+    pub constant: f32,
+    /// Opening angle θ: a node of width `w` at distance `d` counts as one mass if `w/d < θ`
+    /// (0 sums every body exactly).
+    pub theta: f32,
+    /// Plummer softening length ε, m: forces go as `d/(d² + ε²)^{3/2}`.
+    pub softening: f32,
+}
+
+/// A Barnes-Hut quadtree over point masses, rebuilt from scratch each step.
+#[derive(Debug, Clone, Default)]
+pub struct QuadTree {
+    nodes: Vec<Node>,
+    /// Sorted bodies: x, y, mass (structure of arrays for the leaf loops).
+    x: Vec<f32>,
+    y: Vec<f32>,
+    mass: Vec<f32>,
+    /// Original index of each sorted body.
+    order: Vec<u32>,
+    keys: Vec<(u64, u32)>,
+}
+
+impl QuadTree {
+    /// An empty tree.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Rebuilds the tree over `positions` (m) and `masses` (kg), leaves holding at most
+    /// `leaf_capacity` bodies (more only where bodies share a position). Bodies with a
+    /// non-finite position or a non-finite or non-positive mass are left out. Sorting and the
+    /// top of the tree run in parallel on rayon's pool for large inputs.
+    pub fn build(&mut self, positions: &[Vec2], masses: &[f32], leaf_capacity: usize) {
+        let leaf_capacity = leaf_capacity.max(1);
+        let valid = |i: usize| {
+            positions[i].is_finite() && masses.get(i).is_some_and(|m| m.is_finite() && *m > 0.0)
+        };
+        let n = positions.len().min(masses.len());
+        let (min, max) = (0..n)
+            .into_par_iter()
+            .with_min_len(PARALLEL_BODIES)
+            .filter(|&i| valid(i))
+            .map(|i| (positions[i], positions[i]))
+            .reduce(
+                || (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY)),
+                |a, b| (a.0.min(b.0), a.1.max(b.1)),
+            );
+        self.nodes.clear();
+        self.keys.clear();
+        if min.x > max.x {
+            self.x.clear();
+            self.y.clear();
+            self.mass.clear();
+            self.order.clear();
+            return;
+        }
+        // A square a little larger than the bounding box, so every body quantises inside it.
+        let width = (max - min).max_element().max(f32::MIN_POSITIVE) * (1.0 + 1e-5) + 1e-30;
+        let cells = (1u64 << BITS) as f32;
+        let scale = cells / width;
+        let quantise = |v: f32| ((v * scale) as u64).min((1u64 << BITS) - 1);
+        self.keys.par_extend(
+            (0..n)
+                .into_par_iter()
+                .with_min_len(PARALLEL_BODIES)
+                .filter(|&i| valid(i))
+                .map(|i| {
+                    let p = positions[i] - min;
+                    (morton(quantise(p.x), quantise(p.y)), i as u32)
+                }),
+        );
+        // Unique keys (code, index): the order does not depend on the thread count.
+        self.keys.par_sort_unstable();
+        let count = self.keys.len();
+        self.order.clear();
+        self.order.extend(self.keys.iter().map(|k| k.1));
+        self.x.clear();
+        self.y.clear();
+        self.mass.clear();
+        self.x
+            .extend(self.order.iter().map(|&i| positions[i as usize].x));
+        self.y
+            .extend(self.order.iter().map(|&i| positions[i as usize].y));
+        self.mass
+            .extend(self.order.iter().map(|&i| masses[i as usize]));
+        let builder = Builder {
+            keys: &self.keys,
+            x: &self.x,
+            y: &self.y,
+            mass: &self.mass,
+            leaf_capacity,
+        };
+        self.nodes = builder.subtree(0, count, 0, min, width);
+    }
+
+    /// The nodes, root first, in depth-first order.
+    pub fn nodes(&self) -> &[Node] {
+        &self.nodes
+    }
+
+    /// Bodies in the tree.
+    pub fn len(&self) -> usize {
+        self.x.len()
+    }
+
+    /// Whether the tree holds no body.
+    pub fn is_empty(&self) -> bool {
+        self.x.is_empty()
+    }
+
+    /// Original indices of the bodies, in the tree's (Morton) order.
+    pub fn order(&self) -> &[u32] {
+        &self.order
+    }
+
+    /// Position of the `k`-th body in the tree's order, m.
+    pub fn sorted_position(&self, k: usize) -> Vec2 {
+        Vec2::new(self.x[k], self.y[k])
+    }
+
+    /// Acceleration and potential at `p` from every body in the tree (bodies exactly at `p`
+    /// are left out).
+    pub fn field_at(&self, p: Vec2, gravity: &Gravity) -> Field {
+        let theta_sq = gravity.theta * gravity.theta;
+        let eps_sq = gravity.softening * gravity.softening;
+        let mut acceleration = Vec2::ZERO;
+        let mut potential = 0.0f32;
+        let mut i = 0usize;
+        let nodes = &self.nodes;
+        while i < nodes.len() {
+            let node = &nodes[i];
+            if node.leaf {
+                let range = node.first as usize..(node.first + node.count) as usize;
+                let (a, phi) = sum_bodies(
+                    p,
+                    &self.x[range.clone()],
+                    &self.y[range.clone()],
+                    &self.mass[range],
+                    eps_sq,
+                );
+                acceleration += a;
+                potential += phi;
+                i = node.next as usize;
+                continue;
+            }
+            let d = node.center_of_mass - p;
+            let r2 = d.length_squared();
+            let inside = p.x >= node.min.x
+                && p.y >= node.min.y
+                && p.x < node.min.x + node.width
+                && p.y < node.min.y + node.width;
+            if !inside && node.width * node.width < theta_sq * r2 {
+                let s = r2 + eps_sq;
+                let inv = 1.0 / (s * s.sqrt());
+                acceleration += d * (node.mass * inv);
+                potential -= node.mass / s.sqrt();
+                i = node.next as usize;
+            } else {
+                i += 1;
+            }
+        }
+        Field {
+            acceleration: acceleration * gravity.constant,
+            potential: potential * gravity.constant,
+        }
+    }
+}
+
+impl QuadTree {
+    /// The field at every body of the tree, in the tree's (Morton) order: a group walk. Bodies
+    /// are taken in groups of at most 32 neighbours along the curve; each group walks the tree
+    /// once, opening a node unless `width < θ · d` for the distance `d` from the node's centre
+    /// of mass to the group's bounding box (so the test holds for every body in the group, and
+    /// the result is at least as accurate as [`field_at`](Self::field_at) per body), and then
+    /// every body of the group sums the shared list of point masses in one branch-free loop.
+    /// Groups run in parallel on rayon; each body's sum runs in a fixed order, so the result
+    /// does not depend on the thread count.
+    pub fn fields(&self, gravity: &Gravity, out: &mut Vec<Field>) {
+        out.clear();
+        out.resize(self.len(), Field::default());
+        if self.is_empty() {
+            return;
+        }
+        let mut groups = Vec::new();
+        let mut i = 0usize;
+        while i < self.nodes.len() {
+            let node = &self.nodes[i];
+            if node.count <= GROUP_SIZE || node.leaf {
+                groups.push(i as u32);
+                i = node.next as usize;
+            } else {
+                i += 1;
+            }
+        }
+        // Split the output into one slice per group (groups are contiguous and in order).
+        let mut slices: Vec<(u32, &mut [Field])> = Vec::with_capacity(groups.len());
+        let mut rest = out.as_mut_slice();
+        for &g in &groups {
+            let (here, tail) = rest.split_at_mut(self.nodes[g as usize].count as usize);
+            slices.push((g, here));
+            rest = tail;
+        }
+        let eps_sq = gravity.softening * gravity.softening;
+        slices.into_par_iter().for_each_init(
+            || (Vec::new(), Vec::new(), Vec::new()),
+            |(lx, ly, lm), (g, fields)| {
+                let group = &self.nodes[g as usize];
+                let range = group.first as usize..(group.first + group.count) as usize;
+                self.interaction_list(range.clone(), gravity.theta, lx, ly, lm);
+                for (k, field) in range.zip(fields.iter_mut()) {
+                    let p = Vec2::new(self.x[k], self.y[k]);
+                    let (a, phi) = sum_bodies(p, lx, ly, lm, eps_sq);
+                    *field = Field {
+                        acceleration: a * gravity.constant,
+                        potential: phi * gravity.constant,
+                    };
+                }
+            },
+        );
+    }
+
+    /// The point masses (node centres of mass and single bodies) that act on the sorted bodies
+    /// `range`, written to `x`, `y`, `m`.
+    fn interaction_list(
+        &self,
+        range: core::ops::Range<usize>,
+        theta: f32,
+        x: &mut Vec<f32>,
+        y: &mut Vec<f32>,
+        m: &mut Vec<f32>,
+    ) {
+        x.clear();
+        y.clear();
+        m.clear();
+        let mut lo = Vec2::splat(f32::INFINITY);
+        let mut hi = Vec2::splat(f32::NEG_INFINITY);
+        for k in range {
+            let p = Vec2::new(self.x[k], self.y[k]);
+            lo = lo.min(p);
+            hi = hi.max(p);
+        }
+        let theta_sq = theta * theta;
+        let mut i = 0usize;
+        while i < self.nodes.len() {
+            let node = &self.nodes[i];
+            if node.leaf {
+                let bodies = node.first as usize..(node.first + node.count) as usize;
+                x.extend_from_slice(&self.x[bodies.clone()]);
+                y.extend_from_slice(&self.y[bodies.clone()]);
+                m.extend_from_slice(&self.mass[bodies]);
+                i = node.next as usize;
+                continue;
+            }
+            let node_max = node.min + Vec2::splat(node.width);
+            let overlaps = node.min.x <= hi.x
+                && node.min.y <= hi.y
+                && node_max.x >= lo.x
+                && node_max.y >= lo.y;
+            let gap = (lo - node.center_of_mass)
+                .max(node.center_of_mass - hi)
+                .max(Vec2::ZERO);
+            if !overlaps && node.width * node.width < theta_sq * gap.length_squared() {
+                x.push(node.center_of_mass.x);
+                y.push(node.center_of_mass.y);
+                m.push(node.mass);
+                i = node.next as usize;
+            } else {
+                i += 1;
+            }
+        }
+    }
+}
+
+/// Acceleration (per unit `G`) and potential at `p` from the bodies in the slices, skipping any
+/// exactly at `p`.
+#[inline]
+fn sum_bodies(p: Vec2, x: &[f32], y: &[f32], m: &[f32], eps_sq: f32) -> (Vec2, f32) {
+    let (mut ax, mut ay, mut phi) = (0.0f32, 0.0f32, 0.0f32);
+    for ((&bx, &by), &bm) in x.iter().zip(y).zip(m) {
+        let dx = bx - p.x;
+        let dy = by - p.y;
+        let r2 = dx * dx + dy * dy;
+        let s = r2 + eps_sq;
+        // A body at the query point (itself, or one sharing its place) adds nothing.
+        let inv_r = if r2 > 0.0 { 1.0 / s.sqrt() } else { 0.0 };
+        let k = bm * inv_r * inv_r * inv_r;
+        ax += dx * k;
+        ay += dy * k;
+        phi -= bm * inv_r;
+    }
+    (Vec2::new(ax, ay), phi)
+}
+
+/// Direct summation over every body: the exact answer the tree approximates (O(n) per point).
+pub fn direct_field_at(p: Vec2, positions: &[Vec2], masses: &[f32], gravity: &Gravity) -> Field {
+    let eps_sq = gravity.softening * gravity.softening;
+    let mut acceleration = Vec2::ZERO;
+    let mut potential = 0.0f32;
+    for (q, &m) in positions.iter().zip(masses) {
+        if !(q.is_finite() && m.is_finite() && m > 0.0) {
+            continue;
+        }
+        let d = *q - p;
+        let r2 = d.length_squared();
+        if r2 > 0.0 {
+            let s = r2 + eps_sq;
+            let inv_r = 1.0 / s.sqrt();
+            acceleration += d * (m * inv_r * inv_r * inv_r);
+            potential -= m * inv_r;
+        }
+    }
+    Field {
+        acceleration: acceleration * gravity.constant,
+        potential: potential * gravity.constant,
+    }
+}
+
+/// Interleaves the bits of `x` and `y` (x in the even bits).
+fn morton(x: u64, y: u64) -> u64 {
+    fn spread(mut v: u64) -> u64 {
+        v &= 0xffff_ffff;
+        v = (v | (v << 16)) & 0x0000_ffff_0000_ffff;
+        v = (v | (v << 8)) & 0x00ff_00ff_00ff_00ff;
+        v = (v | (v << 4)) & 0x0f0f_0f0f_0f0f_0f0f;
+        v = (v | (v << 2)) & 0x3333_3333_3333_3333;
+        v = (v | (v << 1)) & 0x5555_5555_5555_5555;
+        v
+    }
+    spread(x) | (spread(y) << 1)
+}
+
+/// Builds subtrees over ranges of the sorted bodies.
+struct Builder<'a> {
+    keys: &'a [(u64, u32)],
+    x: &'a [f32],
+    y: &'a [f32],
+    mass: &'a [f32],
+    leaf_capacity: usize,
+}
+
+impl Builder<'_> {
+    /// The subtree over sorted bodies `lo..hi` in the square at `min` of side `width`, at depth
+    /// `level`, with `next` links relative to its own first node.
+    fn subtree(&self, lo: usize, hi: usize, level: u32, min: Vec2, width: f32) -> Vec<Node> {
+        let count = hi - lo;
+        if count <= self.leaf_capacity || level >= BITS {
+            let (mass, center_of_mass) = self.center_of_mass(lo, hi);
+            return vec![Node {
+                center_of_mass,
+                mass,
+                min,
+                width,
+                next: 1,
+                first: lo as u32,
+                count: count as u32,
+                leaf: true,
+            }];
+        }
+        // The quadrant of each body is the next two bits of its code; the range is sorted, so
+        // each quadrant is a contiguous run.
+        let shift = 2 * (BITS - 1 - level);
+        let quadrant = |k: usize| (self.keys[k].0 >> shift) & 3;
+        let mut bounds = [lo; 5];
+        for q in 1..4u64 {
+            bounds[q as usize] =
+                lo + self.keys[lo..hi].partition_point(|k| ((k.0 >> shift) & 3) < q);
+        }
+        bounds[4] = hi;
+        debug_assert!((lo..hi).all(|k| quadrant(k) < 4));
+        let half = 0.5 * width;
+        let child_min = |q: usize| min + Vec2::new((q & 1) as f32 * half, (q >> 1) as f32 * half);
+        let build = |q: usize| {
+            let (a, b) = (bounds[q], bounds[q + 1]);
+            (a < b).then(|| self.subtree(a, b, level + 1, child_min(q), half))
+        };
+        let children: Vec<Option<Vec<Node>>> = if count >= 4 * PARALLEL_BODIES {
+            (0..4).into_par_iter().map(build).collect()
+        } else {
+            (0..4).map(build).collect()
+        };
+        let size = 1 + children.iter().flatten().map(Vec::len).sum::<usize>();
+        let mut nodes = Vec::with_capacity(size);
+        nodes.push(Node::default());
+        let (mut mass, mut moment) = (0.0f64, [0.0f64; 2]);
+        for child in children.into_iter().flatten() {
+            let offset = nodes.len() as u32;
+            let root = child[0];
+            mass += root.mass as f64;
+            moment[0] += root.mass as f64 * root.center_of_mass.x as f64;
+            moment[1] += root.mass as f64 * root.center_of_mass.y as f64;
+            nodes.extend(child.into_iter().map(|mut node| {
+                node.next += offset;
+                node
+            }));
+        }
+        nodes[0] = Node {
+            center_of_mass: centre(mass, moment),
+            mass: mass as f32,
+            min,
+            width,
+            next: nodes.len() as u32,
+            first: lo as u32,
+            count: count as u32,
+            leaf: false,
+        };
+        nodes
+    }
+
+    fn center_of_mass(&self, lo: usize, hi: usize) -> (f32, Vec2) {
+        let (mut mass, mut moment) = (0.0f64, [0.0f64; 2]);
+        for k in lo..hi {
+            let m = self.mass[k] as f64;
+            mass += m;
+            moment[0] += m * self.x[k] as f64;
+            moment[1] += m * self.y[k] as f64;
+        }
+        (mass as f32, centre(mass, moment))
+    }
+}
+
+fn centre(mass: f64, moment: [f64; 2]) -> Vec2 {
+    if mass > 0.0 {
+        Vec2::new((moment[0] / mass) as f32, (moment[1] / mass) as f32)
+    } else {
+        Vec2::ZERO
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{RngExt, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    fn cloud(n: usize, seed: u64) -> (Vec<Vec2>, Vec<f32>) {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let p = (0..n)
+            .map(|_| Vec2::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0)))
+            .collect();
+        let m = (0..n).map(|_| rng.random_range(0.5..1.5)).collect();
+        (p, m)
+    }
+
+    const G: Gravity = Gravity {
+        constant: 1.0,
+        theta: 0.5,
+        softening: 0.0,
+    };
+
+    #[test]
+    fn tree_holds_every_body_once_with_the_total_mass() {
+        let (p, m) = cloud(3000, 1);
+        let mut tree = QuadTree::new();
+        tree.build(&p, &m, 8);
+        assert_eq!(tree.len(), 3000);
+        let mut seen = tree.order().to_vec();
+        seen.sort_unstable();
+        assert!(seen.iter().enumerate().all(|(i, &k)| i as u32 == k));
+        let root = tree.nodes()[0];
+        let total: f64 = m.iter().map(|&m| m as f64).sum();
+        assert!((root.mass as f64 - total).abs() < 1e-3 * total);
+        assert_eq!(root.next as usize, tree.nodes().len());
+        // Leaves partition the bodies, and none holds more than the capacity.
+        let leaves: Vec<&Node> = tree.nodes().iter().filter(|n| n.leaf).collect();
+        assert_eq!(leaves.iter().map(|n| n.count).sum::<u32>(), 3000);
+        assert!(leaves.iter().all(|n| n.count <= 8));
+    }
+
+    #[test]
+    fn theta_zero_is_direct_summation() {
+        let (p, m) = cloud(500, 2);
+        let mut tree = QuadTree::new();
+        tree.build(&p, &m, 4);
+        let exact = Gravity { theta: 0.0, ..G };
+        for &q in p.iter().take(50) {
+            let a = tree.field_at(q, &exact);
+            let b = direct_field_at(q, &p, &m, &exact);
+            assert!((a.acceleration - b.acceleration).length() <= 1e-4 * b.acceleration.length());
+            assert!((a.potential - b.potential).abs() <= 1e-4 * b.potential.abs());
+        }
+    }
+
+    #[test]
+    fn group_walk_is_at_least_as_accurate_as_the_single_walk() {
+        let (p, m) = cloud(5000, 4);
+        let mut tree = QuadTree::new();
+        tree.build(&p, &m, 8);
+        let mut fields = Vec::new();
+        for theta in [0.0, 0.5, 1.0] {
+            let g = Gravity { theta, ..G };
+            tree.fields(&g, &mut fields);
+            assert_eq!(fields.len(), 5000);
+            let (mut group_error, mut single_error) = (0.0f64, 0.0f64);
+            for (k, field) in fields.iter().enumerate().step_by(25) {
+                let q = tree.sorted_position(k);
+                let exact = direct_field_at(q, &p, &m, &g).acceleration;
+                group_error += ((field.acceleration - exact).length() / exact.length()) as f64;
+                let single = tree.field_at(q, &g).acceleration;
+                single_error += ((single - exact).length() / exact.length()) as f64;
+            }
+            // Up to float rounding (1e-5 per sample), never worse than the single walk.
+            assert!(
+                group_error <= single_error + 200.0 * 1e-5,
+                "θ {theta}: {group_error} vs {single_error}"
+            );
+            if theta == 0.0 {
+                assert!(group_error / 200.0 < 1e-5);
+            }
+        }
+    }
+
+    #[test]
+    fn coincident_single_and_far_bodies_stay_finite() {
+        let mut tree = QuadTree::new();
+        // One body: no force on itself.
+        tree.build(&[Vec2::new(3.0, 4.0)], &[2.0], 8);
+        assert_eq!(tree.field_at(Vec2::new(3.0, 4.0), &G), Field::default());
+        // Twenty bodies at one point, with and without softening: finite, and a body there
+        // feels nothing from the others.
+        let p = vec![Vec2::ONE; 20];
+        let m = vec![1.0; 20];
+        tree.build(&p, &m, 4);
+        assert_eq!(tree.len(), 20);
+        for softening in [0.0, 0.1] {
+            let g = Gravity { softening, ..G };
+            let at = tree.field_at(Vec2::ONE, &g);
+            assert_eq!(at.acceleration, Vec2::ZERO);
+            let beside = tree.field_at(Vec2::new(2.0, 1.0), &g).acceleration;
+            assert!(beside.is_finite() && beside.x < 0.0);
+        }
+        // A body a million metres out, and rejected ones.
+        let p = vec![Vec2::ZERO, Vec2::X, Vec2::new(1.0e6, -1.0e6), Vec2::NAN];
+        let m = vec![1.0, 1.0, 1.0, 1.0];
+        tree.build(&p, &m, 1);
+        assert_eq!(tree.len(), 3);
+        let a = tree.field_at(Vec2::ZERO, &G).acceleration;
+        assert!(a.is_finite() && (a.x - 1.0).abs() < 1e-3);
+        tree.build(&[], &[], 8);
+        assert!(tree.is_empty());
+        assert_eq!(tree.field_at(Vec2::ZERO, &G), Field::default());
+    }
+
+    #[test]
+    fn build_is_the_same_for_any_thread_count() {
+        let (p, m) = cloud(100_000, 3);
+        let build = |threads| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| {
+                let mut tree = QuadTree::new();
+                tree.build(&p, &m, 8);
+                (tree.nodes().to_vec(), tree.order().to_vec())
+            })
+        };
+        assert_eq!(build(1), build(3));
+    }
+}

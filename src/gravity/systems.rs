@@ -1,0 +1,237 @@
+//! The gravity plugin's ECS systems: thin glue that gathers bodies into the
+//! [`QuadTree`](super::quadtree::QuadTree), evaluates it from `par_iter_mut`, and integrates
+//! gravity-only bodies with kick-drift-kick leapfrog. See
+//! [`GravityPlugin`](crate::gravity::GravityPlugin).
+
+use super::params::{GravityParams, GravityParamsError};
+use super::quadtree::Field;
+use super::quadtree::{Gravity, QuadTree, direct_field_at};
+use super::{GravityAcceleration, GravityPotential, GravitySlot, Mass};
+use crate::fluid::{Acceleration, FluidParticle, Position, Velocity};
+use bevy::platform::time::Instant;
+use bevy::prelude::*;
+
+/// The tree and the parameters in use.
+#[derive(Resource, Debug, Clone, Default)]
+pub struct GravitySolver {
+    params: GravityParams,
+    tree: QuadTree,
+    positions: Vec<Vec2>,
+    masses: Vec<f32>,
+    /// Field of each tree body, in tree order.
+    fields: Vec<Field>,
+    /// Tree position of each gathered body (`u32::MAX`: left out of the tree).
+    rank: Vec<u32>,
+}
+
+impl GravitySolver {
+    /// The last valid parameters, which the solver runs on.
+    pub fn params(&self) -> &GravityParams {
+        &self.params
+    }
+
+    /// The tree of the last step.
+    pub fn tree(&self) -> &QuadTree {
+        &self.tree
+    }
+}
+
+/// What the last tick measured, for panels and logs.
+#[derive(Resource, Reflect, Debug, Clone, Default, PartialEq)]
+#[reflect(Resource, Default, Debug)]
+pub struct GravityStats {
+    /// Bodies with a [`Mass`].
+    pub bodies: usize,
+    /// Nodes in the tree.
+    pub nodes: usize,
+    /// Wall-clock time of the tree build and field evaluation, ms.
+    pub field_ms: f32,
+    /// Kinetic energy `Σ ½mv²`, J.
+    pub kinetic_energy: f64,
+    /// Potential energy `½ Σ mφ`, J (from the tree: as accurate as θ allows).
+    pub potential_energy: f64,
+    /// Total momentum `Σ mv`, kg·m/s.
+    pub momentum: Vec2,
+    /// Why the current [`GravityParams`] were refused, if they were.
+    #[reflect(ignore)]
+    pub error: Option<GravityParamsError>,
+}
+
+impl GravityStats {
+    /// Kinetic plus potential energy, J.
+    pub fn total_energy(&self) -> f64 {
+        self.kinetic_energy + self.potential_energy
+    }
+}
+
+/// Validates changed parameters and adopts them, or keeps the last valid ones.
+pub(crate) fn apply_gravity_params(
+    params: Res<GravityParams>,
+    mut solver: ResMut<GravitySolver>,
+    mut stats: ResMut<GravityStats>,
+) {
+    if !params.is_changed() {
+        return;
+    }
+    match params.validate() {
+        Ok(()) => {
+            solver.params = params.clone();
+            stats.error = None;
+        }
+        Err(error) => {
+            if stats.error.as_ref() != Some(&error) {
+                error!("{error}; gravity keeps running on the last valid parameters");
+                stats.error = Some(error);
+            }
+        }
+    }
+}
+
+/// Run condition: a body appeared since the last tick (its acceleration must be known before
+/// the first half kick).
+pub(crate) fn bodies_added(added: Query<(), Added<Mass>>) -> bool {
+    !added.is_empty()
+}
+
+/// Builds the tree over every body, evaluates the field at every body (group walk, in parallel
+/// on rayon), and stores each body's acceleration and potential (`par_iter_mut`).
+pub(crate) fn compute_gravity_field(
+    mut solver: ResMut<GravitySolver>,
+    mut stats: ResMut<GravityStats>,
+    mut bodies: Query<(
+        &Position,
+        &Mass,
+        &mut GravitySlot,
+        &mut GravityAcceleration,
+        &mut GravityPotential,
+    )>,
+) {
+    let started = Instant::now();
+    let solver = &mut *solver;
+    solver.positions.clear();
+    solver.masses.clear();
+    for (index, (position, mass, mut slot, _, _)) in bodies.iter_mut().enumerate() {
+        solver.positions.push(position.0);
+        solver.masses.push(mass.0);
+        slot.set_if_neq(GravitySlot(index as u32));
+    }
+    let params = &solver.params;
+    let gravity = Gravity {
+        constant: params.gravitational_constant,
+        theta: params.theta,
+        softening: params.softening,
+    };
+    if !params.direct_sum {
+        solver.tree.build(
+            &solver.positions,
+            &solver.masses,
+            params.leaf_capacity as usize,
+        );
+        solver.tree.fields(&gravity, &mut solver.fields);
+        solver.rank.clear();
+        solver.rank.resize(solver.positions.len(), u32::MAX);
+        for (k, &original) in solver.tree.order().iter().enumerate() {
+            solver.rank[original as usize] = k as u32;
+        }
+    }
+    let solver = &*solver;
+    bodies
+        .par_iter_mut()
+        .for_each(|(position, _, slot, mut acceleration, mut potential)| {
+            let field = if solver.params.direct_sum {
+                if position.is_finite() {
+                    direct_field_at(position.0, &solver.positions, &solver.masses, &gravity)
+                } else {
+                    Field::default()
+                }
+            } else {
+                solver
+                    .rank
+                    .get(slot.0 as usize)
+                    .and_then(|&k| solver.fields.get(k as usize))
+                    .copied()
+                    .unwrap_or_default()
+            };
+            acceleration.0 = field.acceleration;
+            potential.0 = field.potential;
+        });
+    stats.bodies = solver.positions.len();
+    stats.nodes = if solver.params.direct_sum {
+        0
+    } else {
+        solver.tree.nodes().len()
+    };
+    stats.field_ms = started.elapsed().as_secs_f32() * 1000.0;
+}
+
+/// What the leapfrog moves: bodies that are not fluid particles (the fluid steps itself).
+type FreeBody = (
+    &'static mut Position,
+    &'static mut Velocity,
+    &'static GravityAcceleration,
+);
+
+/// First half of leapfrog: half a kick, then a whole drift.
+pub(crate) fn kick_and_drift(
+    time: Res<Time>,
+    mut bodies: Query<FreeBody, (With<Mass>, Without<FluidParticle>)>,
+) {
+    let dt = time.delta_secs();
+    bodies
+        .par_iter_mut()
+        .for_each(|(mut position, mut velocity, acceleration)| {
+            let v = velocity.0 + 0.5 * dt * acceleration.0;
+            let x = position.0 + dt * v;
+            if v.is_finite() && x.is_finite() {
+                velocity.0 = v;
+                position.0 = x;
+            }
+        });
+}
+
+/// Second half of leapfrog: half a kick with the new field; then the energy and momentum.
+pub(crate) fn kick(
+    time: Res<Time>,
+    mut bodies: Query<FreeBody, (With<Mass>, Without<FluidParticle>)>,
+) {
+    let dt = time.delta_secs();
+    bodies
+        .par_iter_mut()
+        .for_each(|(_, mut velocity, acceleration)| {
+            let v = velocity.0 + 0.5 * dt * acceleration.0;
+            if v.is_finite() {
+                velocity.0 = v;
+            }
+        });
+}
+
+/// Energy and momentum of every body (fluid included), summed in query order.
+pub(crate) fn update_gravity_stats(
+    bodies: Query<(&Velocity, &Mass, &GravityPotential)>,
+    mut stats: ResMut<GravityStats>,
+) {
+    let (mut kinetic, mut potential) = (0.0f64, 0.0f64);
+    let mut momentum = [0.0f64; 2];
+    for (velocity, mass, phi) in &bodies {
+        let m = mass.0 as f64;
+        kinetic += 0.5 * m * velocity.length_squared() as f64;
+        potential += 0.5 * m * phi.0 as f64;
+        momentum[0] += m * velocity.x as f64;
+        momentum[1] += m * velocity.y as f64;
+    }
+    stats.kinetic_energy = kinetic;
+    stats.potential_energy = potential;
+    stats.momentum = Vec2::new(momentum[0] as f32, momentum[1] as f32);
+}
+
+/// In each fluid sub-step: adds the tick's gravitational acceleration of fluid particles with a
+/// [`Mass`] to their SPH acceleration.
+pub(crate) fn apply_gravity_to_fluid(
+    mut particles: Query<(&GravityAcceleration, &mut Acceleration), With<FluidParticle>>,
+) {
+    particles
+        .par_iter_mut()
+        .for_each(|(gravity, mut acceleration)| {
+            acceleration.0 += gravity.0;
+        });
+}

@@ -1,0 +1,309 @@
+//! Barnes-Hut gravity: accuracy against direct summation, a two-body orbit, momentum, coincident
+//! bodies, determinism across thread counts, and a self-gravitating fluid blob — headless.
+
+use bevy::prelude::*;
+use bevy::time::TimeUpdateStrategy;
+use bevy_sph2d::fluid::{FluidBlock, Position, SphParams, SphPlugin, Velocity};
+use bevy_sph2d::gravity::{
+    GalaxyDisc, Gravity, GravityParams, GravityPlugin, GravityStats, Mass, QuadTree,
+    direct_field_at,
+};
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use std::process::Command;
+use std::time::Duration;
+
+fn gravity_app(params: GravityParams, tick: f64) -> App {
+    let mut app = App::new();
+    app.add_plugins((MinimalPlugins, GravityPlugin::default().with_params(params)))
+        .insert_resource(Time::<Fixed>::from_duration(Duration::from_secs_f64(tick)))
+        .insert_resource(TimeUpdateStrategy::FixedTimesteps(1));
+    app
+}
+
+fn bodies(app: &mut App) -> Vec<(Vec2, Vec2, f32)> {
+    let world = app.world_mut();
+    let mut query = world.query::<(&Position, &Velocity, &Mass)>();
+    query.iter(world).map(|(p, v, m)| (p.0, v.0, m.0)).collect()
+}
+
+fn median(mut values: Vec<f32>) -> f32 {
+    values.sort_unstable_by(f32::total_cmp);
+    values[values.len() / 2]
+}
+
+#[test]
+fn tree_matches_direct_summation_and_improves_as_theta_falls() {
+    let mut rng = ChaCha8Rng::seed_from_u64(7);
+    let positions: Vec<Vec2> = (0..2000)
+        .map(|_| Vec2::new(rng.random_range(0.0..10.0), rng.random_range(0.0..10.0)))
+        .collect();
+    let masses: Vec<f32> = (0..2000).map(|_| rng.random_range(0.1..2.0)).collect();
+    let mut tree = QuadTree::new();
+    tree.build(&positions, &masses, 8);
+    let errors = |theta: f32| {
+        let g = Gravity {
+            constant: 1.0,
+            theta,
+            softening: 0.0,
+        };
+        let relative: Vec<f32> = positions
+            .iter()
+            .map(|&p| {
+                let exact = direct_field_at(p, &positions, &masses, &g).acceleration;
+                let approx = tree.field_at(p, &g).acceleration;
+                (approx - exact).length() / exact.length()
+            })
+            .collect();
+        median(relative)
+    };
+    let by_theta: Vec<(f32, f32)> = [1.0, 0.7, 0.5, 0.3, 0.1]
+        .into_iter()
+        .map(|t| (t, errors(t)))
+        .collect();
+    println!("median relative error by theta: {by_theta:?}");
+    let at_half = by_theta[2].1;
+    assert!(at_half < 0.01, "median error {at_half} at theta 0.5");
+    assert!(
+        by_theta.windows(2).all(|w| w[1].1 < w[0].1),
+        "error must fall with theta: {by_theta:?}"
+    );
+}
+
+#[test]
+fn two_body_circular_orbit_keeps_radius_and_energy() {
+    // Equal masses 1 kg, 1 m apart, G = 1: each circles the centre of mass at 0.5 m with
+    // v = √(G m / 2d), period T = 2π · 0.5 / v.
+    let (g, m, d) = (1.0f32, 1.0f32, 1.0f32);
+    let v = (g * m / (2.0 * d)).sqrt();
+    let period = core::f32::consts::TAU * 0.5 * d / v;
+    let steps_per_orbit = 1000;
+    let params = GravityParams {
+        gravitational_constant: g,
+        softening: 0.0,
+        ..default()
+    };
+    let mut app = gravity_app(params, (period / steps_per_orbit as f32) as f64);
+    app.world_mut().spawn_batch([
+        (
+            Mass(m),
+            Position(Vec2::new(-0.5, 0.0)),
+            Velocity(Vec2::new(0.0, -v)),
+        ),
+        (
+            Mass(m),
+            Position(Vec2::new(0.5, 0.0)),
+            Velocity(Vec2::new(0.0, v)),
+        ),
+    ]);
+    app.update();
+    app.update();
+    let energy = |app: &App| app.world().resource::<GravityStats>().total_energy();
+    let start = energy(&app);
+    // Exact: E = 2·½mv² − G m²/d.
+    let exact = (m * v * v - g * m * m / d) as f64;
+    assert!(
+        (start - exact).abs() < 1e-3 * exact.abs(),
+        "{start} vs {exact}"
+    );
+    let mut worst_radius = 0.0f32;
+    let mut worst_energy = 0.0f64;
+    for _ in 0..10 * steps_per_orbit {
+        app.update();
+        let b = bodies(&mut app);
+        let separation = b[0].0.distance(b[1].0);
+        worst_radius = worst_radius.max((separation / d - 1.0).abs());
+        worst_energy = worst_energy.max(((energy(&app) - start) / start).abs());
+    }
+    println!("10 orbits: radius within {worst_radius:e}, energy drift {worst_energy:e}");
+    assert!(worst_radius < 0.01, "radius drifted by {worst_radius}");
+    assert!(worst_energy < 0.001, "energy drifted by {worst_energy}");
+}
+
+#[test]
+fn cloud_conserves_momentum_and_survives_coincident_bodies() {
+    let mut rng = ChaCha8Rng::seed_from_u64(3);
+    let params = GravityParams {
+        gravitational_constant: 1.0,
+        theta: 0.5,
+        softening: 0.02,
+        ..default()
+    };
+    let mut app = gravity_app(params, 0.002);
+    let mut spawned: Vec<(Mass, Position, Velocity)> = (0..800)
+        .map(|_| {
+            (
+                Mass(rng.random_range(0.5..1.5) / 800.0),
+                Position(Vec2::new(
+                    rng.random_range(-1.0..1.0),
+                    rng.random_range(-1.0..1.0),
+                )),
+                Velocity(Vec2::new(
+                    rng.random_range(-0.1..0.1),
+                    rng.random_range(-0.1..0.1),
+                )),
+            )
+        })
+        .collect();
+    // Three bodies in one place.
+    for _ in 0..3 {
+        spawned.push((
+            Mass(0.001),
+            Position(Vec2::new(0.25, 0.25)),
+            Velocity(Vec2::ZERO),
+        ));
+    }
+    app.world_mut().spawn_batch(spawned);
+    app.update();
+    app.update();
+    let momentum = |b: &[(Vec2, Vec2, f32)]| b.iter().map(|(_, v, m)| *v * *m).sum::<Vec2>();
+    let scale = |b: &[(Vec2, Vec2, f32)]| b.iter().map(|(_, v, m)| v.length() * m).sum::<f32>();
+    let start = bodies(&mut app);
+    let p0 = momentum(&start);
+    for _ in 0..300 {
+        app.update();
+    }
+    let end = bodies(&mut app);
+    assert!(
+        end.iter().all(|(p, v, _)| p.is_finite() && v.is_finite()),
+        "a body went non-finite"
+    );
+    let drift = (momentum(&end) - p0).length() / scale(&end);
+    println!("momentum drift {drift:e} of Σ m|v|");
+    assert!(drift < 1e-3, "momentum drifted by {drift} of Σ m|v|");
+}
+
+fn fingerprint(b: &[(Vec2, Vec2, f32)]) -> u64 {
+    use std::hash::{DefaultHasher, Hash, Hasher};
+    let mut hasher = DefaultHasher::new();
+    for (p, v, _) in b {
+        for x in [p.x, p.y, v.x, v.y] {
+            x.to_bits().hash(&mut hasher);
+        }
+    }
+    hasher.finish()
+}
+
+fn galaxy_run(app: &mut App, seed: u64) -> u64 {
+    app.world_mut().commands().queue(GalaxyDisc {
+        seed,
+        ..GalaxyDisc::new(5000)
+    });
+    for _ in 0..20 {
+        app.update();
+    }
+    fingerprint(&bodies(app))
+}
+
+fn galaxy_params() -> GravityParams {
+    GravityParams {
+        gravitational_constant: 1.0,
+        theta: 0.7,
+        softening: 0.01,
+        ..default()
+    }
+}
+
+/// Run by [`galaxy_is_deterministic_across_thread_counts`] in a child process with
+/// `GRAVITY_TEST_THREADS` Bevy compute threads and as many rayon threads.
+#[test]
+#[ignore = "helper, run by galaxy_is_deterministic_across_thread_counts"]
+fn galaxy_fingerprint_with_threads_from_env() {
+    let threads: usize = std::env::var("GRAVITY_TEST_THREADS")
+        .expect("GRAVITY_TEST_THREADS")
+        .parse()
+        .expect("a thread count");
+    let mut app = App::new();
+    app.add_plugins((
+        MinimalPlugins.set(bevy_sph2d::task_pool_plugin(threads)),
+        GravityPlugin::default().with_params(galaxy_params()),
+    ))
+    .insert_resource(Time::<Fixed>::from_duration(Duration::from_millis(5)))
+    .insert_resource(TimeUpdateStrategy::FixedTimesteps(1));
+    println!("fingerprint={}", galaxy_run(&mut app, 1));
+}
+
+#[test]
+fn galaxy_is_deterministic_across_thread_counts() {
+    let exe = std::env::current_exe().expect("test binary");
+    let prints: Vec<String> = [1, 2, 4]
+        .iter()
+        .map(|threads| {
+            let out = Command::new(&exe)
+                .args([
+                    "galaxy_fingerprint_with_threads_from_env",
+                    "--exact",
+                    "--ignored",
+                    "--nocapture",
+                ])
+                .env("GRAVITY_TEST_THREADS", threads.to_string())
+                .env("RAYON_NUM_THREADS", threads.to_string())
+                .output()
+                .expect("run the helper");
+            let stdout = String::from_utf8_lossy(&out.stdout).to_string();
+            assert!(out.status.success(), "helper failed: {stdout}");
+            stdout
+                .lines()
+                .find(|l| l.starts_with("fingerprint="))
+                .unwrap_or_else(|| panic!("no fingerprint in {stdout}"))
+                .to_string()
+        })
+        .collect();
+    assert!(prints.windows(2).all(|w| w[0] == w[1]), "{prints:?}");
+    let a = galaxy_run(&mut gravity_app(galaxy_params(), 0.005), 1);
+    let b = galaxy_run(&mut gravity_app(galaxy_params(), 0.005), 2);
+    assert_eq!(prints[0], format!("fingerprint={a}"));
+    assert_ne!(a, b, "another seed should give another run");
+}
+
+#[test]
+fn a_fluid_blob_holds_itself_together_with_gravity() {
+    // A 0.2 m square of fluid in open space, no external gravity: without self-gravity it
+    // spreads (pressure pushes its free surface out); with a strong G it stays compact.
+    let spread = |g: f32| {
+        let params = SphParams {
+            tank: None,
+            gravity: Vec2::ZERO,
+            particle_spacing: 0.01,
+            speed_of_sound: 5.0,
+            support_ratio: 2.0,
+            ..SphParams::water()
+        };
+        let mass = params.particle_mass();
+        let mut app = App::new();
+        app.add_plugins((
+            MinimalPlugins,
+            SphPlugin::default().with_params(params.clone()),
+            GravityPlugin::default().with_params(GravityParams {
+                gravitational_constant: g,
+                softening: 0.01,
+                theta: 0.5,
+                ..default()
+            }),
+        ))
+        .insert_resource(Time::<Fixed>::from_duration(Duration::from_secs_f64(0.01)))
+        .insert_resource(TimeUpdateStrategy::FixedTimesteps(1));
+        let ids = FluidBlock::new(Vec2::ZERO, Vec2::splat(0.2))
+            .with_hydrostatic(false)
+            .spawn(app.world_mut());
+        for id in ids {
+            app.world_mut().entity_mut(id).insert(Mass(mass));
+        }
+        for _ in 0..60 {
+            app.update();
+        }
+        let b = bodies(&mut app);
+        assert!(b.iter().all(|(p, v, _)| p.is_finite() && v.is_finite()));
+        let centre = b.iter().map(|(p, _, _)| *p).sum::<Vec2>() / b.len() as f32;
+        b.iter()
+            .map(|(p, _, _)| p.distance(centre))
+            .fold(0.0, f32::max)
+    };
+    let free = spread(0.0);
+    let bound = spread(2.0e-3);
+    println!("blob radius after 0.6 s: {free} m without gravity, {bound} m with");
+    assert!(
+        bound < 0.9 * free,
+        "gravity did not hold the blob: {bound} vs {free}"
+    );
+}
