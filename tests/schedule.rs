@@ -12,6 +12,8 @@ use common::*;
 #[test]
 fn systems_have_no_ambiguous_order() {
     let mut app = create_app(SphParams::default());
+    // The gravity plugin shares the schedule and the fluid's sub-steps.
+    app.add_plugins(GravityPlugin::default());
     let strict = ScheduleBuildSettings {
         ambiguity_detection: LogLevel::Error,
         ..default()
@@ -22,6 +24,7 @@ fn systems_have_no_ambiguous_order() {
     app.edit_schedule(SphSubstep, |s| {
         s.set_build_settings(strict.clone());
     });
+    app.world_mut().commands().queue(GalaxyDisc::new(100));
     spawn(&mut app, FluidBlock::dam_break(0.3, 0.3));
     // Building a schedule with an ambiguity at LogLevel::Error panics here.
     run(&mut app, 2);
