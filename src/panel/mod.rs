@@ -93,9 +93,19 @@ impl Rates {
     }
 }
 
-/// Tells the tools whether egui has the pointer or keyboard.
-fn share_input_focus(wants: Res<EguiWantsInput>, mut pointer: ResMut<Pointer>) {
-    let over_ui = wants.wants_any_pointer_input();
+/// Tells the tools whether egui has the pointer or keyboard. The docked panel is drawn on egui's
+/// background layer, which egui does not count as an area under the pointer, so the pointer is
+/// also over the UI wherever it is over the panel's strip of the window ([`ViewInsets`]).
+fn share_input_focus(
+    wants: Res<EguiWantsInput>,
+    insets: Res<ViewInsets>,
+    window: Option<Single<&Window, With<bevy::window::PrimaryWindow>>>,
+    mut pointer: ResMut<Pointer>,
+) {
+    let over_panel = window
+        .and_then(|window| window.cursor_position())
+        .is_some_and(|cursor| cursor.x < insets.left);
+    let over_ui = wants.wants_any_pointer_input() || over_panel;
     let keyboard = wants.wants_any_keyboard_input();
     if pointer.over_ui != over_ui || pointer.ui_has_keyboard != keyboard {
         pointer.over_ui = over_ui;
@@ -436,7 +446,7 @@ fn gravity_section(ui: &mut egui::Ui, data: &mut PanelData) {
         return;
     };
     egui::CollapsingHeader::new("Gravity (Barnes-Hut)")
-        .default_open(stats.bodies > 0)
+        .default_open(true)
         .show(ui, |ui| {
             let mut g = (**gravity).clone();
             ui.add(

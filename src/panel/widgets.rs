@@ -65,9 +65,36 @@ pub(super) fn color_bar(ui: &mut egui::Ui, map: ColorMap, range: ColorRange, uni
         ui.painter().rect_filled(cell, 0.0, color);
     }
     ui.horizontal(|ui| {
-        ui.small(format!("{:.4} {unit}", range.min));
+        ui.small(format!("{} {unit}", significant(range.min)));
         ui.with_layout(egui::Layout::right_to_left(egui::Align::Center), |ui| {
-            ui.small(format!("{:.4} {unit}", range.max));
+            ui.small(format!("{} {unit}", significant(range.max)));
         });
     });
+}
+
+/// `value` with about four significant digits (no exponent for everyday magnitudes).
+fn significant(value: f32) -> String {
+    if value == 0.0 || !value.is_finite() {
+        return format!("{value}");
+    }
+    let magnitude = value.abs().log10().floor() as i32;
+    if !(-4..=6).contains(&magnitude) {
+        return format!("{value:.3e}");
+    }
+    let decimals = (3 - magnitude).clamp(0, 7) as usize;
+    format!("{value:.decimals$}")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::significant;
+
+    #[test]
+    fn four_significant_digits() {
+        assert_eq!(significant(998.123_4), "998.1");
+        assert_eq!(significant(0.012_341), "0.01234");
+        assert_eq!(significant(12.0), "12.00");
+        assert_eq!(significant(1.5e9), "1.500e9");
+        assert_eq!(significant(0.0), "0");
+    }
 }
