@@ -4,7 +4,7 @@
 //! Left mouse button: the tool picked in the panel (pull by default); right button: push; wheel:
 //! tool radius. Space pauses, `.` steps, `R` resets, ←/→ tilt the tank, `Tab` hides the panel.
 //!
-//! `cargo run --release --example dam_break [-- PARTICLES]`
+//! `cargo run --example dam_break [-- PARTICLES]` (the dev profile is optimised)
 
 use bevy::prelude::*;
 use bevy_sph2d::demo::SphDemoPlugin;

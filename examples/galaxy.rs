@@ -4,7 +4,7 @@
 //! tool, key `5`); the panel's gravity section sets G, θ and softening and shows energy and
 //! momentum. `R` restarts the disc.
 //!
-//! `cargo run --release --example galaxy [-- BODIES]`
+//! `cargo run --example galaxy [-- BODIES]`
 
 use bevy::prelude::*;
 use bevy_sph2d::fluid::{ScenarioKind, SphScenario};

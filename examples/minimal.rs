@@ -1,7 +1,7 @@
 //! The shortest way to put the fluid in a game: the plugins, a camera, a block of water.
 //! Drag with the left mouse button to pull the water, the right button to push it.
 //!
-//! `cargo run --release --example minimal`
+//! `cargo run --example minimal`
 
 use bevy::prelude::*;
 use bevy_sph2d::prelude::*;

@@ -3,7 +3,7 @@
 //!
 //! Mouse tools and the panel work as in `dam_break`; `R` starts the collision again.
 //!
-//! `cargo run --release --example planet`
+//! `cargo run --example planet`
 
 use bevy::prelude::*;
 use bevy_sph2d::fluid::{ScenarioKind, SphScenario};
