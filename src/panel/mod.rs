@@ -11,7 +11,7 @@ use crate::render::{BodyColor, BodyView, ColorMap, ParticleView, RenderMode, Vie
 use bevy::prelude::*;
 use bevy_egui::input::EguiWantsInput;
 use bevy_egui::{EguiContexts, EguiPlugin, EguiPrimaryContextPass, egui};
-use widgets::{color_bar, enum_combo, param_slider};
+use widgets::{color_bar, enum_combo, param_slider, stat_grid};
 
 /// The egui tweak panel, docked on the left of the window.
 ///
@@ -219,31 +219,27 @@ fn stats_section(ui: &mut egui::Ui, data: &PanelData, stats: &SphStats) {
             } else {
                 0.0
             };
-            egui::Grid::new("stats").num_columns(2).show(ui, |ui| {
-                let mut row = |name: &str, value: String| {
-                    ui.label(name);
-                    ui.monospace(value);
-                    ui.end_row();
-                };
-                row("particles", format!("{}", stats.particles));
-                row("wall particles", format!("{}", stats.wall_particles));
-                row("sub-steps / s", format!("{:.0}", rates.substeps_per_s));
-                row("ms / sub-step", format!("{ms_per_substep:.2}"));
-                row("ms / tick", format!("{:.1}", stats.tick_ms));
-                row("sub-steps / tick", format!("{}", stats.substeps));
-                row("sub-step dt", format!("{:.2e} s", stats.dt));
-                row("sim speed", format!("{:.2} × real time", rates.sim_speed));
-                row(
-                    "density error",
-                    format!(
-                        "mean {:.2} %, max {:.1} %",
-                        stats.mean_density_error, stats.max_density_error
-                    ),
-                );
-                row("max speed", format!("{:.2} m/s", stats.max_speed));
-                row("sim time", format!("{:.2} s", stats.time));
-                row("fps", format!("{:.0}", rates.fps));
-            });
+            let mut rows = Vec::new();
+            let mut row = |name: &'static str, value: String| rows.push((name, value));
+            row("particles", format!("{}", stats.particles));
+            row("wall particles", format!("{}", stats.wall_particles));
+            row("sub-steps / s", format!("{:.0}", rates.substeps_per_s));
+            row("ms / sub-step", format!("{ms_per_substep:.2}"));
+            row("ms / tick", format!("{:.1}", stats.tick_ms));
+            row("sub-steps / tick", format!("{}", stats.substeps));
+            row("sub-step dt", format!("{:.2e} s", stats.dt));
+            row("sim speed", format!("{:.2} × real time", rates.sim_speed));
+            row(
+                "density error",
+                format!(
+                    "mean {:.2} %, max {:.1} %",
+                    stats.mean_density_error, stats.max_density_error
+                ),
+            );
+            row("max speed", format!("{:.2} m/s", stats.max_speed));
+            row("sim time", format!("{:.2} s", stats.time));
+            row("fps", format!("{:.0}", rates.fps));
+            stat_grid(ui, "stats", rows);
             if stats.non_finite_resets > 0 {
                 ui.colored_label(
                     egui::Color32::LIGHT_RED,
@@ -461,31 +457,25 @@ fn gravity_section(ui: &mut egui::Ui, data: &mut PanelData) {
             if g != **gravity {
                 **gravity = g;
             }
-            egui::Grid::new("gravity_stats")
-                .num_columns(2)
-                .show(ui, |ui| {
-                    let mut row = |name: &str, value: String| {
-                        ui.label(name);
-                        ui.monospace(value);
-                        ui.end_row();
-                    };
-                    row("bodies", format!("{}", stats.bodies));
-                    row("tree nodes", format!("{}", stats.nodes));
-                    row("tree + field", format!("{:.1} ms", stats.field_ms));
-                    row("kinetic energy", format!("{:.4e} J", stats.kinetic_energy));
-                    row(
-                        "potential energy",
-                        format!("{:.4e} J", stats.potential_energy),
-                    );
-                    row("total energy", format!("{:.4e} J", stats.total_energy()));
-                    row(
-                        "momentum",
-                        format!(
-                            "({:.3e}, {:.3e}) kg·m/s",
-                            stats.momentum.x, stats.momentum.y
-                        ),
-                    );
-                });
+            let mut rows = Vec::new();
+            let mut row = |name: &'static str, value: String| rows.push((name, value));
+            row("bodies", format!("{}", stats.bodies));
+            row("tree nodes", format!("{}", stats.nodes));
+            row("tree + field", format!("{:.1} ms", stats.field_ms));
+            row("kinetic energy", format!("{:.4e} J", stats.kinetic_energy));
+            row(
+                "potential energy",
+                format!("{:.4e} J", stats.potential_energy),
+            );
+            row("total energy", format!("{:.4e} J", stats.total_energy()));
+            row(
+                "momentum",
+                format!(
+                    "({:.3e}, {:.3e}) kg·m/s",
+                    stats.momentum.x, stats.momentum.y
+                ),
+            );
+            stat_grid(ui, "gravity_stats", rows);
             if let Some(error) = &stats.error {
                 ui.colored_label(egui::Color32::LIGHT_RED, format!("refused: {error}"));
             }

@@ -43,6 +43,17 @@ pub(super) fn enum_combo<T: Copy + PartialEq>(
         });
 }
 
+/// A two-column grid of statistics: names, and values in a monospace font.
+pub(super) fn stat_grid(ui: &mut egui::Ui, id: &str, rows: Vec<(&'static str, String)>) {
+    egui::Grid::new(id).num_columns(2).show(ui, |ui| {
+        for (name, value) in rows {
+            ui.label(name);
+            ui.monospace(value);
+            ui.end_row();
+        }
+    });
+}
+
 /// The colour bar of `map` over `range`, with its end values.
 pub(super) fn color_bar(ui: &mut egui::Ui, map: ColorMap, range: ColorRange, unit: &str) {
     let width = ui.available_width().min(260.0);
