@@ -4,16 +4,16 @@ mod common;
 
 use bevy::prelude::*;
 use bevy_sph2d::fluid::slices::SliceFluid;
-use bevy_sph2d::fluid::{FluidBlock, KernelKind, Obstacle, SphParams, Tank};
+use bevy_sph2d::fluid::{FluidBlock, KernelKind, Obstacle, PressureSolver, SphParams, Tank};
 use common::*;
 
-fn check(kernel: KernelKind) {
+fn check(kernel: KernelKind, base: SphParams) {
     let params = SphParams {
         particle_spacing: 0.01,
         kernel,
         tank: Some(Tank::new(0.6, 0.4)),
         speed_of_sound: SphParams::speed_of_sound_for_height(0.2),
-        ..default()
+        ..base
     };
     let block = FluidBlock::dam_break(0.15, 0.2)
         .with_seed(3)
@@ -36,16 +36,16 @@ fn check(kernel: KernelKind) {
     }
     assert_eq!(ecs.len(), ids.len());
     assert!(
-        (sim_time(&app) - fluid.time).abs() < 1e-12,
+        (sim_time(&app) - fluid.clock.time).abs() < 1e-12,
         "ecs time {} slices time {}, substeps {}",
         sim_time(&app),
-        fluid.time,
-        fluid.substeps
+        fluid.clock.time,
+        fluid.clock.total_substeps
     );
     assert!(
-        fluid.substeps > 20,
+        fluid.clock.total_substeps > 20,
         "sub-stepping expected, got {}",
-        fluid.substeps
+        fluid.clock.total_substeps
     );
     let mut moved = 0.0f32;
     for (i, s) in ecs.iter().enumerate() {
@@ -67,10 +67,28 @@ fn check(kernel: KernelKind) {
 
 #[test]
 fn ecs_matches_slices_wendland() {
-    check(KernelKind::WendlandC2);
+    check(KernelKind::WendlandC2, SphParams::water());
 }
 
 #[test]
 fn ecs_matches_slices_muller() {
-    check(KernelKind::Muller);
+    check(KernelKind::Muller, SphParams::water());
+}
+
+#[test]
+fn ecs_matches_slices_dfsph_wendland() {
+    check(KernelKind::WendlandC2, dfsph());
+}
+
+#[test]
+fn ecs_matches_slices_dfsph_cubic() {
+    check(KernelKind::CubicSpline, dfsph());
+}
+
+fn dfsph() -> SphParams {
+    SphParams {
+        solver: PressureSolver::Dfsph,
+        support_ratio: 2.5,
+        ..SphParams::water()
+    }
 }

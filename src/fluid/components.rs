@@ -3,7 +3,7 @@
 //! Spawning [`FluidParticle`] with a [`Position`] is enough: the marker requires the rest, and the
 //! solver fills in density, pressure and acceleration at the next step.
 
-use super::solver::NeighborList;
+use super::layout::NeighborList;
 use bevy::prelude::*;
 
 /// Marks an entity as an SPH fluid particle. Its required components carry the state the solver
@@ -25,6 +25,7 @@ use bevy::prelude::*;
     Acceleration,
     Density,
     Pressure,
+    Stiffness,
     NeighborSlot,
     Neighbors
 )]
@@ -56,6 +57,13 @@ pub struct Density(pub f32);
 #[derive(Component, Reflect, Debug, Clone, Copy, Default, Deref, DerefMut, PartialEq)]
 #[reflect(Component, Default, Debug, PartialEq)]
 pub struct Pressure(pub f32);
+
+/// The divergence-free solver's stiffness `[κ, κᵛ]` of the particle's last sub-step (the
+/// density and divergence solves' pressures per rest density, m²/s²), kept to warm-start the
+/// next one. Solver state; games can ignore it.
+#[derive(Component, Reflect, Debug, Clone, Copy, Default, Deref, DerefMut, PartialEq)]
+#[reflect(Component, Default, Debug, PartialEq)]
+pub struct Stiffness(pub Vec2);
 
 /// Where the particle sits in the solver's cell-sorted neighbour snapshot, and in which
 /// snapshot: written by [`SphSubstepSystems::Neighbors`](crate::fluid::SphSubstepSystems::Neighbors)

@@ -406,6 +406,28 @@ pub fn lattice_sum<K: RadialKernel>(kernel: &K, spacing: f32) -> f64 {
     sum
 }
 
+/// `Σⱼ (xⱼ − xᵢ)ₓ ∂ₓW(xᵢ − xⱼ)` over an infinite square lattice of the given spacing, the
+/// particle `i` at a lattice point: the first moment of the gradient, which the continuous kernel
+/// makes one per unit volume. Dimensionless times 1/m², like [`lattice_sum`]; their ratio is the
+/// gradient's consistency on the lattice.
+pub fn lattice_gradient_moment<K: RadialKernel>(kernel: &K, spacing: f32) -> f64 {
+    let reach = (kernel.support() / spacing).ceil() as i32 + 1;
+    let mut sum = 0.0f64;
+    for j in -reach..=reach {
+        for i in -reach..=reach {
+            if i == 0 && j == 0 {
+                continue;
+            }
+            let x = (i as f64) * spacing as f64;
+            let r = ((i * i + j * j) as f64).sqrt() * spacing as f64;
+            // ∇ᵢW(xᵢ − xⱼ) = W'(r) (xᵢ − xⱼ)/r with xᵢ − xⱼ = −x.
+            let gradient_x = kernel.derivative(r as f32) as f64 * (-x) / r;
+            sum += x * gradient_x;
+        }
+    }
+    sum
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

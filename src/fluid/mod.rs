@@ -1,9 +1,12 @@
 //! The SPH fluid plugin. See [`SphPlugin`].
 
 pub mod boundary;
+pub mod clock;
 pub mod components;
+pub mod dfsph;
 pub mod grid;
 pub mod kernels;
+pub mod layout;
 pub mod parallel;
 pub mod params;
 pub mod scenario;
@@ -11,6 +14,7 @@ pub mod slices;
 pub mod solver;
 pub mod spawn;
 pub mod systems;
+pub mod wcsph;
 
 use bevy::ecs::intern::Interned;
 use bevy::ecs::schedule::{ScheduleLabel, SingleThreadedExecutor};
@@ -19,17 +23,20 @@ use bevy::prelude::*;
 use crate::control::{SimulationControlPlugin, SimulationControlSystems, simulation_running};
 
 pub use boundary::{Obstacle, Tank};
+pub use clock::SubstepClock;
 pub use components::{
-    Acceleration, Density, FluidParticle, NeighborSlot, Neighbors, Position, Pressure, Velocity,
+    Acceleration, Density, FluidParticle, NeighborSlot, Neighbors, Position, Pressure, Stiffness,
+    Velocity,
 };
 pub use kernels::KernelKind;
-pub use params::{SphParams, SphParamsError};
+pub use params::{DfsphSettings, PressureSolver, SphParams, SphParamsError};
 pub use scenario::{ScenarioKind, SphScenario};
 pub use spawn::FluidBlock;
-pub use systems::{SphParamsStatus, SphSolver, SphStats, SubstepClock, refresh_fluid_state};
+pub use systems::{SphParamsStatus, SphSolver, SphStats, refresh_fluid_state};
 
-/// Weakly compressible SPH fluid, simulated in a fixed-step schedule ([`FixedUpdate`] by
-/// default) with a stable number of sub-steps per tick.
+/// SPH fluid, simulated in a fixed-step schedule ([`FixedUpdate`] by default) with a stable
+/// number of sub-steps per tick, incompressible through the divergence-free solver (DFSPH, the
+/// default) or weakly compressible (WCSPH); see [`PressureSolver`].
 ///
 /// Spawn [`FluidParticle`]s (or queue a [`FluidBlock`]) and tune [`SphParams`]; read
 /// [`SphStats`]. Add [`Obstacle`] components for solids inside the tank.
@@ -43,14 +50,18 @@ pub use systems::{SphParamsStatus, SphSolver, SphStats, SubstepClock, refresh_fl
 ///    [`SimulationControl`](crate::control::SimulationControl) pauses): split the tick into stable sub-steps and run the [`SphSubstep`]
 ///    schedule once per sub-step. In it, in order ([`SphSubstepSystems`]):
 ///    1. [`SphSubstepSystems::Neighbors`]: rebuild the cell grid and the sorted snapshot.
-///    2. [`SphSubstepSystems::Density`]: density and pressure (`par_iter_mut`), wall pressure.
-///    3. [`SphSubstepSystems::Forces`]: pressure, viscosity and gravity into [`Acceleration`]
-///       (`par_iter_mut`; this overwrites the previous sub-step's value).
+///    2. [`SphSubstepSystems::Density`]: WCSPH: density and pressure (`par_iter_mut`), wall
+///       pressure. DFSPH: neighbour lists with cached kernel gradients, densities and factors,
+///       then the divergence-free solve.
+///    3. [`SphSubstepSystems::Forces`]: into [`Acceleration`] (`par_iter_mut`; this overwrites
+///       the previous sub-step's value): WCSPH: pressure, viscosity and gravity. DFSPH:
+///       viscosity and gravity, the pressure following in `Integrate`.
 ///    4. [`SphSubstepSystems::ExternalForces`]: empty, for your own forces: add to
 ///       [`Acceleration`] with `+=`, e.g.
 ///       `app.add_systems(SphSubstep, wind.in_set(SphSubstepSystems::ExternalForces))`.
-///    5. [`SphSubstepSystems::Integrate`]: choose the step, advance (`par_iter_mut`), keep
-///       particles in the tank and out of obstacles.
+///    5. [`SphSubstepSystems::Integrate`]: choose the step; DFSPH solves for the pressure that
+///       keeps the density at rest under all the accelerations above; advance
+///       (`par_iter_mut`), keep particles in the tank and out of obstacles.
 /// 3. [`SphSystems::Finish`]: fill [`SphStats`].
 ///
 /// Parallel iteration uses Bevy's `ComputeTaskPool`. On machines with few cores Bevy's default
@@ -148,6 +159,7 @@ impl Plugin for SphPlugin {
             .register_type::<Acceleration>()
             .register_type::<Density>()
             .register_type::<Pressure>()
+            .register_type::<Stiffness>()
             .register_type::<NeighborSlot>()
             .register_type::<Obstacle>()
             .insert_resource(self.params.clone())
@@ -169,13 +181,36 @@ impl Plugin for SphPlugin {
                 )
                     .chain(),
             );
+            let wcsph = systems::uses_solver(PressureSolver::Wcsph);
+            let dfsph = systems::uses_solver(PressureSolver::Dfsph);
+            // The solvers' systems exclude each other by run condition; chaining them makes
+            // that order explicit to the scheduler (WCSPH's, then DFSPH's, in each stage).
             substep.add_systems((
                 systems::build_neighbor_grid.in_set(SphSubstepSystems::Neighbors),
-                (systems::compute_density, systems::compute_wall_pressure)
+                (
+                    (systems::compute_density, systems::compute_wall_pressure)
+                        .chain()
+                        .run_if(wcsph.clone()),
+                    (systems::prepare_dfsph, systems::solve_divergence)
+                        .chain()
+                        .run_if(dfsph.clone()),
+                )
                     .chain()
                     .in_set(SphSubstepSystems::Density),
-                systems::compute_forces.in_set(SphSubstepSystems::Forces),
-                (systems::choose_time_step, systems::integrate_particles)
+                (
+                    systems::compute_forces.run_if(wcsph.clone()),
+                    systems::compute_dfsph_forces.run_if(dfsph.clone()),
+                )
+                    .chain()
+                    .in_set(SphSubstepSystems::Forces),
+                (
+                    (systems::choose_time_step, systems::integrate_particles)
+                        .chain()
+                        .run_if(wcsph),
+                    (systems::solve_density, systems::integrate_dfsph)
+                        .chain()
+                        .run_if(dfsph),
+                )
                     .chain()
                     .in_set(SphSubstepSystems::Integrate),
             ));

@@ -6,6 +6,9 @@
 pub trait Parallel: Sync {
     /// Calls `work` once for every item, in any order, possibly on several threads.
     fn for_each<T: Send, F: Fn(&mut T) + Sync>(&self, items: &mut [T], work: F);
+
+    /// How many threads `for_each` may use.
+    fn threads(&self) -> usize;
 }
 
 /// Runs everything on the calling thread.
@@ -16,6 +19,10 @@ impl Parallel for Sequential {
     fn for_each<T: Send, F: Fn(&mut T) + Sync>(&self, items: &mut [T], work: F) {
         items.iter_mut().for_each(work);
     }
+
+    fn threads(&self) -> usize {
+        1
+    }
 }
 
 /// [`Parallel`] on rayon's current thread pool.
@@ -25,7 +32,15 @@ pub struct Rayon;
 impl Parallel for Rayon {
     fn for_each<T: Send, F: Fn(&mut T) + Sync>(&self, items: &mut [T], work: F) {
         use rayon::prelude::*;
+        if items.len() <= 1 {
+            items.iter_mut().for_each(work);
+            return;
+        }
         items.par_iter_mut().for_each(&work);
+    }
+
+    fn threads(&self) -> usize {
+        rayon::current_num_threads()
     }
 }
 

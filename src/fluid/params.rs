@@ -62,6 +62,80 @@ pub struct SphParams {
     pub max_substeps: u32,
     /// Restitution of the geometric wall collision that backs up the boundary particles, 0–1.
     pub wall_restitution: f32,
+    /// Which pressure solver keeps the fluid incompressible.
+    pub solver: PressureSolver,
+    /// Settings of [`PressureSolver::Dfsph`] (ignored by WCSPH).
+    pub dfsph: DfsphSettings,
+}
+
+/// The pressure solver.
+#[derive(Reflect, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum PressureSolver {
+    /// Weakly compressible SPH with the Tait equation of state: explicit, stepped at the acoustic
+    /// CFL limit (`C h / c₀`, a tenth of a millisecond at centimetre spacing). The default and
+    /// the reference.
+    #[default]
+    Wcsph,
+    /// Divergence-free SPH (Bender & Koschier 2015, 2017): an implicit incompressible solver
+    /// whose time step follows the flow's CFL (`C Δx / v_max`, milliseconds), not the speed of
+    /// sound. **Experimental**: not yet stable at rest (see [`dfsph`](crate::fluid::dfsph)).
+    /// See [`DfsphSettings`].
+    Dfsph,
+}
+
+impl PressureSolver {
+    /// Every choice, for menus.
+    pub const ALL: [PressureSolver; 2] = [Self::Wcsph, Self::Dfsph];
+
+    /// A short human-readable name.
+    pub fn label(self) -> &'static str {
+        match self {
+            Self::Dfsph => "DFSPH",
+            Self::Wcsph => "WCSPH",
+        }
+    }
+}
+
+/// Settings of the divergence-free solver ([`PressureSolver::Dfsph`]).
+///
+/// Each sub-step makes the velocity field divergence-free (a Jacobi solve to
+/// `divergence_tolerance`), adds gravity, viscosity and external forces, then solves for the
+/// pressure that brings the predicted density back to rest (to `density_tolerance`), and moves
+/// the particles. Both solves start from the last sub-step's pressures (`warm_start`), so a
+/// resting pool converges in the minimum of iterations.
+#[derive(Reflect, Debug, Clone, Copy, PartialEq)]
+#[reflect(Default, Debug, PartialEq)]
+pub struct DfsphSettings {
+    /// Courant number `C` of the flow's time-step limit `dt = C Δx / v_max`, 0.05–1 (0.5: no
+    /// particle moves more than half a spacing per step).
+    pub cfl_number: f32,
+    /// Longest sub-step, s (the limit when the fluid is at rest).
+    pub max_time_step: f32,
+    /// Mean compression `(ρ − ρ₀)/ρ₀` the density solve stops at, as a fraction (0.001 = 0.1%).
+    pub density_tolerance: f32,
+    /// Mean density change over one step `dt (Dρ/Dt)/ρ₀` the divergence solve stops at, as a
+    /// fraction (0.01 = 1%).
+    pub divergence_tolerance: f32,
+    /// Most Jacobi iterations of the density solve per sub-step.
+    pub max_density_iterations: u32,
+    /// Most Jacobi iterations of the divergence solve per sub-step (0 switches it off).
+    pub max_divergence_iterations: u32,
+    /// Start each solve from the last sub-step's pressures.
+    pub warm_start: bool,
+}
+
+impl Default for DfsphSettings {
+    fn default() -> Self {
+        Self {
+            cfl_number: 0.5,
+            max_time_step: 0.005,
+            density_tolerance: 0.001,
+            divergence_tolerance: 0.01,
+            max_density_iterations: 100,
+            max_divergence_iterations: 100,
+            warm_start: true,
+        }
+    }
 }
 
 impl Default for SphParams {
@@ -91,7 +165,7 @@ impl std::error::Error for SphParamsError {}
 pub const MAX_WALL_PARTICLES: u64 = 4_000_000;
 
 impl SphParams {
-    /// Water in a 2 m × 1.2 m tank at 2 cm spacing.
+    /// Water in a 2 m × 1.2 m tank at 2 cm spacing (weakly compressible).
     pub fn water() -> Self {
         Self {
             rest_density: 1000.0,
@@ -108,6 +182,8 @@ impl SphParams {
             cfl_number: 0.4,
             max_substeps: 400,
             wall_restitution: 0.0,
+            solver: PressureSolver::Wcsph,
+            dfsph: DfsphSettings::default(),
         }
     }
 
@@ -168,6 +244,35 @@ impl SphParams {
             }
         };
         (self.rest_density as f64 / sum) as f32
+    }
+
+    /// The factor on kernel gradients that makes the discrete gradient of a linear field exact
+    /// on the rest lattice: `1 / Σⱼ Vⱼ (xⱼ − xᵢ)ₓ ∂ₓWᵢⱼ` with `V = m/ρ₀` (see
+    /// [`lattice_gradient_moment`](kernels::lattice_gradient_moment)). Used by DFSPH.
+    pub fn gradient_scale(&self) -> f32 {
+        let h = self.support_radius();
+        let dx = self.particle_spacing;
+        let (sum, moment) = match self.kernel {
+            KernelKind::WendlandC2 => {
+                let w = kernels::WendlandC2::new(h);
+                (
+                    kernels::lattice_sum(&w, dx),
+                    kernels::lattice_gradient_moment(&w, dx),
+                )
+            }
+            KernelKind::CubicSpline => {
+                let w = kernels::CubicSpline::new(h);
+                (
+                    kernels::lattice_sum(&w, dx),
+                    kernels::lattice_gradient_moment(&w, dx),
+                )
+            }
+            KernelKind::Muller => (
+                kernels::lattice_sum(&kernels::Poly6::new(h), dx),
+                kernels::lattice_gradient_moment(&kernels::Spiky::new(h), dx),
+            ),
+        };
+        (sum / moment) as f32
     }
 
     /// Layers of wall particles needed so a particle at a wall has a full neighbourhood.
@@ -271,6 +376,38 @@ impl SphParams {
             });
         }
         range("wall_restitution", self.wall_restitution, 0.0, 1.0, "")?;
+        let d = &self.dfsph;
+        range("dfsph.cfl_number", d.cfl_number, 0.05, 1.0, "")?;
+        range("dfsph.max_time_step", d.max_time_step, 1.0e-5, 0.1, "s")?;
+        range(
+            "dfsph.density_tolerance",
+            d.density_tolerance,
+            1.0e-6,
+            0.1,
+            "",
+        )?;
+        range(
+            "dfsph.divergence_tolerance",
+            d.divergence_tolerance,
+            1.0e-6,
+            1.0,
+            "",
+        )?;
+        for (field, value, min) in [
+            ("dfsph.max_density_iterations", d.max_density_iterations, 1),
+            (
+                "dfsph.max_divergence_iterations",
+                d.max_divergence_iterations,
+                0,
+            ),
+        ] {
+            if !(min..=10_000).contains(&value) {
+                return Err(SphParamsError {
+                    field,
+                    message: format!("{value} is outside {min}..=10000"),
+                });
+            }
+        }
         if let Some(tank) = &self.tank {
             for (field, value) in [("tank.width", tank.width), ("tank.height", tank.height)] {
                 if !(value.is_finite() && value >= self.particle_spacing && value <= 1.0e4) {
@@ -333,6 +470,10 @@ impl SphParams {
             tank: self.tank,
             wall_layers: self.wall_layers(),
             max_substeps: self.max_substeps,
+            solver: self.solver,
+            dfsph: self.dfsph,
+            volume: self.particle_mass() / self.rest_density,
+            gradient_scale: self.gradient_scale(),
         })
     }
 }

@@ -1,17 +1,22 @@
 //! The whole fluid solver on plain vectors, without the ECS: the reference the ECS path is
 //! measured and tested against, and a way to run SPH outside Bevy. It calls the same functions in
-//! [`solver`](super::solver) as the systems do, in the same order, so for the same particles in
-//! the same order both paths produce the same numbers bit for bit.
+//! [`solver`](super::solver), [`wcsph`](super::wcsph) and [`dfsph`](super::dfsph) as the systems
+//! do, in the same order, and drives the same [`SubstepClock`], so for the same particles in the
+//! same order both paths produce the same numbers bit for bit.
 //!
 //! See [`SphPlugin`](crate::fluid::SphPlugin) for the ECS version.
 
 use super::boundary::Obstacle;
+use super::clock::SubstepClock;
+use super::dfsph::Dfsph;
+use super::layout::{FluidSnapshot, NeighborList, Walls};
 use super::parallel::Rayon;
+use super::params::PressureSolver;
 use super::solver::{
-    FluidSnapshot, NeighborList, SphConstants, Walls, acceleration_at, advance_particle,
-    density_and_neighbors_at, mean_neighbors, plan_substep, pressure_from_density,
-    stable_time_step, wall_state_at, with_kernels,
+    SphConstants, advance_particle, density_and_neighbors_at, mean_neighbors, move_particle,
+    with_kernels,
 };
+use super::wcsph::{acceleration_at, pressure_from_density, stable_time_step, wall_state_at};
 use bevy::math::Vec2;
 use rayon::prelude::*;
 
@@ -26,21 +31,22 @@ pub struct SliceFluid {
     pub position: Vec<Vec2>,
     /// Velocities, m/s.
     pub velocity: Vec<Vec2>,
-    /// Accelerations of the last sub-step, m/s².
+    /// Accelerations of the last sub-step, m/s² (DFSPH: without pressure).
     pub acceleration: Vec<Vec2>,
     /// Densities, kg/m³.
     pub density: Vec<f32>,
     /// Pressures, Pa.
     pub pressure: Vec<f32>,
+    /// DFSPH stiffness `[κ, κᵛ]`, m²/s², carried to the next sub-step.
+    pub stiffness: Vec<Vec2>,
     neighbors: Vec<NeighborList>,
     snapshot: FluidSnapshot,
     walls: Walls,
-    /// Simulated time, s.
-    pub time: f64,
-    /// Sub-steps taken so far.
-    pub substeps: u64,
-    /// Simulated time dropped because a tick needed more than `max_substeps`, s.
-    pub dropped_time: f64,
+    dfsph: Dfsph,
+    /// The sub-step clock: simulated time, sub-steps, dropped time.
+    pub clock: SubstepClock,
+    /// Solver iterations (both DFSPH solves) since the start.
+    pub iterations: u64,
 }
 
 impl SliceFluid {
@@ -56,12 +62,13 @@ impl SliceFluid {
             acceleration: vec![Vec2::ZERO; n],
             density: vec![constants.rest_density; n],
             pressure: vec![0.0; n],
+            stiffness: vec![Vec2::ZERO; n],
             neighbors: vec![NeighborList::default(); n],
             snapshot: FluidSnapshot::default(),
             walls,
-            time: 0.0,
-            substeps: 0,
-            dropped_time: 0.0,
+            dfsph: Dfsph::default(),
+            clock: SubstepClock::default(),
+            iterations: 0,
         }
     }
 
@@ -93,23 +100,19 @@ impl SliceFluid {
     /// Advances by one tick of `tick` seconds in as many stable sub-steps as it needs (at most
     /// `max_substeps`); returns the number of sub-steps.
     pub fn advance(&mut self, tick: f64) -> u32 {
-        let mut remaining = tick;
-        let mut steps = 0;
-        while remaining > 1e-9 * tick && steps < self.constants.max_substeps {
-            let last = steps + 1 == self.constants.max_substeps;
-            let dt = self.substep(remaining, last);
-            remaining -= dt as f64;
-            steps += 1;
+        self.clock.begin_tick(tick);
+        while self.clock.wants_substep(self.constants.max_substeps) {
+            self.substep(|clock, c, stable, empty| {
+                clock.take_substep(stable, c.max_substeps, empty)
+            });
         }
-        if remaining > 1e-9 * tick {
-            self.dropped_time += remaining;
-        }
-        steps
+        self.clock.end_tick();
+        self.clock.substeps
     }
 
-    /// One sub-step of the largest stable length; returns it, s.
+    /// One sub-step of the largest stable length, outside any tick; returns it, s.
     pub fn step(&mut self) -> f32 {
-        self.substep(f64::INFINITY, true)
+        self.substep(|clock, _, stable, _| clock.take_free_substep(stable))
     }
 
     /// Mean number of particles (fluid and wall, the particle itself included) within the kernel
@@ -118,13 +121,26 @@ impl SliceFluid {
         mean_neighbors(&self.constants, &self.snapshot, &self.walls)
     }
 
-    /// One sub-step: neighbours, density and pressure, wall pressure, forces, integration.
-    /// Takes the largest stable step that divides `remaining` evenly (or just the largest
-    /// stable step if `last`), and returns it, s.
-    pub fn substep(&mut self, remaining: f64, last: bool) -> f32 {
-        let c = self.constants;
+    /// One sub-step with the configured solver; `take` turns the stability limit into the step
+    /// through the clock.
+    fn substep(
+        &mut self,
+        take: impl FnOnce(&mut SubstepClock, &SphConstants, f32, bool) -> f32,
+    ) -> f32 {
         self.snapshot
-            .rebuild(&c, &self.position, &self.velocity, &Rayon);
+            .rebuild(&self.constants, &self.position, &self.velocity, &Rayon);
+        match self.constants.solver {
+            PressureSolver::Wcsph => self.wcsph_substep(take),
+            PressureSolver::Dfsph => self.dfsph_substep(take),
+        }
+    }
+
+    /// WCSPH: density and pressure, wall pressure, forces, integration.
+    fn wcsph_substep(
+        &mut self,
+        take: impl FnOnce(&mut SubstepClock, &SphConstants, f32, bool) -> f32,
+    ) -> f32 {
+        let c = self.constants;
         with_kernels!(c.kernel, c.support, |w, g| {
             let (snapshot, walls) = (&self.snapshot, &self.walls);
             let slots = snapshot.grid().slot_of();
@@ -165,19 +181,10 @@ impl SliceFluid {
                     *a = acceleration_at(&g, &c, *x, *v, *rho, *p, list, fluid, walls);
                 });
         });
-        let max_acceleration = self
-            .acceleration
-            .iter()
-            .fold(0.0f32, |m, a| m.max(a.length_squared()))
-            .sqrt();
+        let max_acceleration = max_length(&self.acceleration);
         let stable = stable_time_step(&c, self.snapshot.max_speed, max_acceleration);
-        let dt = if self.position.is_empty() {
-            remaining.min(f32::MAX as f64) as f32
-        } else if last {
-            stable.min(remaining as f32)
-        } else {
-            plan_substep(remaining, stable)
-        };
+        self.clock.max_acceleration = max_acceleration;
+        let dt = take(&mut self.clock, &c, stable, self.position.is_empty());
         let obstacles = &self.walls.obstacles;
         (&mut self.position, &mut self.velocity, &self.acceleration)
             .into_par_iter()
@@ -185,8 +192,79 @@ impl SliceFluid {
             .for_each(|(x, v, a)| {
                 advance_particle(&c, obstacles, x, v, *a, dt);
             });
-        self.time += dt as f64;
-        self.substeps += 1;
         dt
     }
+
+    /// DFSPH: neighbours, densities and factors, divergence solve, non-pressure forces, step,
+    /// density solve, move.
+    fn dfsph_substep(
+        &mut self,
+        take: impl FnOnce(&mut SubstepClock, &SphConstants, f32, bool) -> f32,
+    ) -> f32 {
+        let c = self.constants;
+        let order = self.snapshot.grid().order();
+        let stiffness = &self.stiffness;
+        self.dfsph.prepare(
+            &c,
+            &self.snapshot,
+            &self.walls,
+            |slot| stiffness[order[slot] as usize],
+            &Rayon,
+        );
+        let last_dt = divergence_step(&self.clock, &c, self.snapshot.max_speed);
+        self.dfsph.solve_divergence(&c, last_dt, &Rayon);
+        let (dfsph, snapshot) = (&self.dfsph, &self.snapshot);
+        let slots = snapshot.grid().slot_of();
+        (&mut self.acceleration, &mut self.velocity, slots)
+            .into_par_iter()
+            .with_min_len(MIN_PARTICLES_PER_TASK)
+            .for_each(|(a, v, &slot)| {
+                *v = dfsph.velocity(slot as usize);
+                *a = dfsph.non_pressure_acceleration(&c, snapshot, slot as usize);
+                dfsph.set_acceleration(slot as usize, *a);
+            });
+        let max_acceleration = max_length(&self.acceleration);
+        let stable = self.dfsph.stable_time_step(&c, max_acceleration);
+        self.clock.max_acceleration = max_acceleration;
+        let dt = take(&mut self.clock, &c, stable, self.position.is_empty());
+        self.iterations += self.dfsph.solve_density(&c, dt, &Rayon) as u64;
+        self.iterations += self.dfsph.report.divergence_iterations as u64;
+        let (dfsph, obstacles) = (&self.dfsph, &self.walls.obstacles);
+        (
+            &mut self.position,
+            &mut self.velocity,
+            &mut self.density,
+            &mut self.pressure,
+            &mut self.stiffness,
+            slots,
+        )
+            .into_par_iter()
+            .with_min_len(MIN_PARTICLES_PER_TASK)
+            .for_each(|(x, v, rho, p, k, &slot)| {
+                let slot = slot as usize;
+                *rho = dfsph.density(&c, slot);
+                *p = dfsph.pressure(&c, slot);
+                *k = dfsph.stiffness(slot);
+                move_particle(&c, obstacles, x, v, dfsph.velocity(slot), dt);
+            });
+        dt
+    }
+}
+
+/// The step the divergence solve makes the velocities divergence-free for: the last sub-step's
+/// length, or on the first sub-step the flow's limit at the current speed.
+pub(crate) fn divergence_step(clock: &SubstepClock, c: &SphConstants, max_speed: f32) -> f32 {
+    if clock.dt > 0.0 {
+        clock.dt
+    } else {
+        super::dfsph::stable_time_step(c, max_speed, 0.0)
+    }
+}
+
+/// The largest length among `vectors`.
+pub(crate) fn max_length(vectors: &[Vec2]) -> f32 {
+    vectors
+        .iter()
+        .fold(0.0f32, |m, a| m.max(a.length_squared()))
+        .sqrt()
 }

@@ -120,7 +120,9 @@ impl FluidBlock {
         let mut positions = self.positions(spacing);
         let g = params.gravity;
         let downward = g.y < 0.0 && g.x.abs() <= 1e-3 * g.y.abs();
-        if !(self.hydrostatic && downward && params.validate().is_ok()) {
+        // An incompressible solver keeps rest density at any depth: nothing to pack.
+        let compressible = params.solver == super::params::PressureSolver::Wcsph;
+        if !(self.hydrostatic && downward && compressible && params.validate().is_ok()) {
             return positions;
         }
         let (columns, rows) = self.lattice_size(spacing);

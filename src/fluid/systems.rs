@@ -4,17 +4,22 @@
 
 use super::SphSubstep;
 use super::boundary::Obstacle;
+use super::clock::SubstepClock;
 use super::components::{
-    Acceleration, Density, FluidParticle, NeighborSlot, Neighbors, Position, Pressure, Velocity,
+    Acceleration, Density, FluidParticle, NeighborSlot, Neighbors, Position, Pressure, Stiffness,
+    Velocity,
 };
+use super::dfsph::Dfsph;
+use super::layout::{FluidSnapshot, Walls};
 use super::parallel::Parallel;
-use super::params::{SphParams, SphParamsError};
+use super::params::{PressureSolver, SphParams, SphParamsError};
+use super::slices::{divergence_step, max_length};
 use super::solver::{
-    FluidSnapshot, SphConstants, Walls, acceleration_at, advance_particle,
-    density_and_neighbors_at, plan_substep, pressure_from_density, stable_time_step, wall_state_at,
-    with_kernels,
+    SphConstants, advance_particle, density_and_neighbors_at, move_particle, with_kernels,
 };
+use super::wcsph::{acceleration_at, pressure_from_density, stable_time_step, wall_state_at};
 use bevy::ecs::batching::BatchingStrategy;
+use bevy::ecs::query::QueryItem;
 use bevy::platform::time::Instant;
 use bevy::prelude::*;
 use bevy::tasks::{ComputeTaskPool, ParallelSliceMut};
@@ -31,8 +36,28 @@ const BATCHING: BatchingStrategy = BatchingStrategy {
     batches_per_thread: 8,
 };
 
+/// Below this many particles the per-particle passes run on the calling thread: waking Bevy's
+/// compute threads for a pass costs more than the pass (measured with the `bench` example).
+pub const MIN_PARALLEL_PARTICLES: usize = 4096;
+
+/// Runs `$work` over `$query`'s items, in parallel batches from [`MIN_PARALLEL_PARTICLES`]
+/// particles (`$n`) on, on the calling thread below.
+macro_rules! for_each_particle {
+    ($query:expr, $n:expr, $data:ty, $work:expr) => {{
+        let work = |item: QueryItem<'_, '_, $data>| ($work)(item);
+        if $n < MIN_PARALLEL_PARTICLES {
+            $query.iter_mut().for_each(work);
+        } else {
+            $query
+                .par_iter_mut()
+                .batching_strategy(BATCHING)
+                .for_each(work);
+        }
+    }};
+}
+
 /// [`Parallel`] on Bevy's compute task pool (a single chunk runs inline).
-struct ComputePool;
+pub(crate) struct ComputePool;
 
 impl Parallel for ComputePool {
     fn for_each<T: Send, F: Fn(&mut T) + Sync>(&self, items: &mut [T], work: F) {
@@ -47,6 +72,10 @@ impl Parallel for ComputePool {
             }
         });
     }
+
+    fn threads(&self) -> usize {
+        ComputeTaskPool::get().thread_num().max(1)
+    }
 }
 
 /// The solver's working state: derived constants, the neighbour snapshot, the wall particles
@@ -57,9 +86,12 @@ pub struct SphSolver {
     snapshot: FluidSnapshot,
     walls: Walls,
     walls_dirty: bool,
+    dfsph: Dfsph,
     gathered_position: Vec<Vec2>,
     gathered_velocity: Vec<Vec2>,
+    gathered_stiffness: Vec<Vec2>,
     clock: SubstepClock,
+    iterations: SolverIterations,
     /// Counts snapshot rebuilds; [`NeighborSlot`]s carry the one they were assigned in.
     generation: u32,
     non_finite: u64,
@@ -82,9 +114,12 @@ impl SphSolver {
             snapshot: FluidSnapshot::default(),
             walls: Walls::default(),
             walls_dirty: true,
+            dfsph: Dfsph::default(),
             gathered_position: Vec::new(),
             gathered_velocity: Vec::new(),
+            gathered_stiffness: Vec::new(),
             clock: SubstepClock::default(),
+            iterations: SolverIterations::default(),
             generation: 0,
             non_finite: 0,
         }
@@ -110,52 +145,32 @@ impl SphSolver {
         &self.clock
     }
 
+    /// DFSPH iteration counts.
+    pub fn iterations(&self) -> &SolverIterations {
+        &self.iterations
+    }
+
+    /// What the last DFSPH sub-step's solves did.
+    pub fn dfsph_report(&self) -> &super::dfsph::DfsphReport {
+        &self.dfsph.report
+    }
+
     /// Starts simulated time again from zero (after a reset).
     pub fn restart_clock(&mut self) {
         self.clock = SubstepClock::default();
+        self.iterations = SolverIterations::default();
     }
 }
 
-/// How the current tick is being split into sub-steps, and the simulated time so far.
+/// DFSPH iterations counted over ticks.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct SubstepClock {
-    /// Length of the current tick, s.
-    pub tick: f64,
-    /// What is left of it, s.
-    pub remaining: f64,
-    /// Sub-steps taken in the current tick.
-    pub substeps: u32,
-    /// The sub-step being integrated (or last integrated), s.
-    pub dt: f32,
-    /// The stability limit at the last sub-step, s.
-    pub stable_dt: f32,
-    /// Largest acceleration at the last sub-step, m/s².
-    pub max_acceleration: f32,
-    /// Simulated time, s.
-    pub time: f64,
-    /// Sub-steps taken since start-up.
-    pub total_substeps: u64,
-    /// Simulated time dropped because ticks needed more than `max_substeps`, s.
-    pub dropped: f64,
-}
-
-impl SubstepClock {
-    fn begin_tick(&mut self, tick: f64) {
-        self.tick = tick;
-        self.remaining = tick;
-        self.substeps = 0;
-    }
-
-    fn wants_substep(&self, max_substeps: u32) -> bool {
-        self.remaining > 1e-9 * self.tick && self.substeps < max_substeps
-    }
-
-    fn end_tick(&mut self) {
-        if self.remaining > 1e-9 * self.tick {
-            self.dropped += self.remaining;
-        }
-        self.remaining = 0.0;
-    }
+pub struct SolverIterations {
+    /// Density-solve iterations in the current (or last) tick.
+    pub density: u32,
+    /// Divergence-solve iterations in the current (or last) tick.
+    pub divergence: u32,
+    /// Iterations of both solves since start-up.
+    pub total: u64,
 }
 
 /// Whether the last change to [`SphParams`] was accepted.
@@ -196,6 +211,16 @@ pub struct SphStats {
     /// Particle updates that would have produced a non-finite value and were held back (should
     /// stay zero).
     pub non_finite_resets: u64,
+    /// The pressure solver in use.
+    pub solver: PressureSolver,
+    /// DFSPH density-solve iterations in the last tick (all its sub-steps).
+    pub density_iterations: u32,
+    /// DFSPH divergence-solve iterations in the last tick.
+    pub divergence_iterations: u32,
+    /// DFSPH iterations of both solves since start-up (or the last reset).
+    pub total_iterations: u64,
+    /// Mean predicted compression left by the last density solve, %.
+    pub solver_density_error: f32,
 }
 
 /// Validates a changed [`SphParams`] and adopts it, or keeps the last valid one and reports why.
@@ -271,15 +296,23 @@ pub(crate) fn rebuild_walls(
 /// current positions and velocities, without advancing time: for reading a consistent state
 /// right after spawning (the solver otherwise computes them during the next sub-step).
 pub fn refresh_fluid_state(world: &mut World) {
-    let results = [
+    let mut results = vec![
         world.run_system_cached(apply_params),
         world.run_system_cached(reject_invalid_particles),
         world.run_system_cached(rebuild_walls),
         world.run_system_cached(build_neighbor_grid),
-        world.run_system_cached(compute_density),
-        world.run_system_cached(compute_wall_pressure),
-        world.run_system_cached(compute_forces),
     ];
+    match world.resource::<SphSolver>().constants.solver {
+        PressureSolver::Wcsph => results.extend([
+            world.run_system_cached(compute_density),
+            world.run_system_cached(compute_wall_pressure),
+            world.run_system_cached(compute_forces),
+        ]),
+        PressureSolver::Dfsph => results.extend([
+            world.run_system_cached(prepare_dfsph),
+            world.run_system_cached(compute_dfsph_forces),
+        ]),
+    }
     for error in results.into_iter().filter_map(Result::err) {
         error!("refresh_fluid_state: {error}");
     }
@@ -292,7 +325,12 @@ pub(crate) fn run_substeps(world: &mut World) {
         return;
     }
     let started = Instant::now();
-    world.resource_mut::<SphSolver>().clock.begin_tick(tick);
+    {
+        let mut solver = world.resource_mut::<SphSolver>();
+        solver.clock.begin_tick(tick);
+        solver.iterations.density = 0;
+        solver.iterations.divergence = 0;
+    }
     loop {
         let solver = world.resource::<SphSolver>();
         if !solver.clock.wants_substep(solver.constants.max_substeps) {
@@ -308,25 +346,37 @@ pub(crate) fn run_substeps(world: &mut World) {
 /// velocities into the cell-sorted snapshot and tells each particle its slot.
 pub(crate) fn build_neighbor_grid(
     mut solver: ResMut<SphSolver>,
-    mut particles: Query<(&Position, &Velocity, &mut NeighborSlot), With<FluidParticle>>,
+    mut particles: Query<
+        (&Position, &Velocity, &Stiffness, &mut NeighborSlot),
+        With<FluidParticle>,
+    >,
 ) {
     let solver = &mut *solver;
     let (positions, velocities) = (&mut solver.gathered_position, &mut solver.gathered_velocity);
+    let stiffnesses = &mut solver.gathered_stiffness;
     positions.clear();
     velocities.clear();
+    stiffnesses.clear();
+    let dfsph = solver.constants.solver == PressureSolver::Dfsph;
     // Whole table columns at a time where the storage allows (it always does for the
     // required components); item by item otherwise. Both visit entities in the same order.
     match particles.contiguous_iter() {
         Ok(tables) => {
-            for (p, v, _) in tables {
+            for (p, v, k, _) in tables {
                 positions.extend(p.iter().map(|p| p.0));
                 velocities.extend(v.iter().map(|v| v.0));
+                if dfsph {
+                    stiffnesses.extend(k.iter().map(|k| k.0));
+                }
             }
         }
         Err(_) => {
-            for (p, v, _) in &particles {
+            for (p, v, k, _) in &particles {
                 positions.push(p.0);
                 velocities.push(v.0);
+                if dfsph {
+                    stiffnesses.push(k.0);
+                }
             }
         }
     }
@@ -343,7 +393,7 @@ pub(crate) fn build_neighbor_grid(
     let mut slots = solver.snapshot.grid().slot_of();
     match particles.contiguous_iter_mut() {
         Ok(tables) => {
-            for (_, _, mut table) in tables {
+            for (_, _, _, mut table) in tables {
                 let (here, rest) = slots.split_at(table.len());
                 for (slot, &s) in table.iter_mut().zip(here) {
                     *slot = NeighborSlot {
@@ -355,7 +405,7 @@ pub(crate) fn build_neighbor_grid(
             }
         }
         Err(_) => {
-            for ((_, _, mut slot), &s) in particles.iter_mut().zip(slots) {
+            for ((_, _, _, mut slot), &s) in particles.iter_mut().zip(slots) {
                 *slot = NeighborSlot {
                     slot: s,
                     generation,
@@ -383,29 +433,35 @@ pub(crate) fn compute_density(
 ) {
     let solver = &*solver;
     let c = solver.constants;
+    let n = solver.snapshot.len();
     with_kernels!(c.kernel, c.support, |w, _g| {
-        particles
-            .par_iter_mut()
-            .batching_strategy(BATCHING)
-            .for_each(
-                |(position, slot, mut density, mut pressure, mut neighbors)| {
-                    let rho = density_and_neighbors_at(
-                        &w,
-                        &c,
-                        position.0,
-                        &solver.snapshot,
-                        &solver.walls,
-                        &mut neighbors.0,
-                    );
-                    let p = pressure_from_density(&c, rho);
-                    density.0 = rho;
-                    pressure.0 = p;
-                    // A particle spawned since the snapshot was built has no slot in it.
-                    if slot.generation == solver.generation {
-                        solver.snapshot.set_pressure(slot.slot as usize, rho, p);
-                    }
-                },
+        for_each_particle!(particles, n, DensityData, |(
+            position,
+            slot,
+            mut density,
+            mut pressure,
+            mut neighbors,
+        ): QueryItem<
+            '_,
+            '_,
+            DensityData,
+        >| {
+            let rho = density_and_neighbors_at(
+                &w,
+                &c,
+                position.0,
+                &solver.snapshot,
+                &solver.walls,
+                &mut neighbors.0,
             );
+            let p = pressure_from_density(&c, rho);
+            density.0 = rho;
+            pressure.0 = p;
+            // A particle spawned since the snapshot was built has no slot in it.
+            if slot.generation == solver.generation {
+                solver.snapshot.set_pressure(slot.slot as usize, rho, p);
+            }
+        });
     });
 }
 
@@ -458,62 +514,69 @@ pub(crate) fn compute_forces(
 ) {
     let solver = &*solver;
     let c = solver.constants;
+    let n = solver.snapshot.len();
     with_kernels!(c.kernel, c.support, |_w, g| {
-        particles
-            .par_iter_mut()
-            .batching_strategy(BATCHING)
-            .for_each(
-                |(position, velocity, density, pressure, neighbors, mut acceleration)| {
-                    acceleration.0 = acceleration_at(
-                        &g,
-                        &c,
-                        position.0,
-                        velocity.0,
-                        density.0,
-                        pressure.0,
-                        &neighbors.0,
-                        &solver.snapshot,
-                        &solver.walls,
-                    );
-                },
+        for_each_particle!(particles, n, ForceData, |(
+            position,
+            velocity,
+            density,
+            pressure,
+            neighbors,
+            mut acceleration,
+        ): QueryItem<
+            '_,
+            '_,
+            ForceData,
+        >| {
+            acceleration.0 = acceleration_at(
+                &g,
+                &c,
+                position.0,
+                velocity.0,
+                density.0,
+                pressure.0,
+                &neighbors.0,
+                &solver.snapshot,
+                &solver.walls,
             );
+        });
     });
 }
 
-/// Picks the sub-step length from the stability limits and what is left of the tick.
+/// Picks the WCSPH sub-step length from the stability limits and what is left of the tick.
 pub(crate) fn choose_time_step(
     mut solver: ResMut<SphSolver>,
     particles: Query<&Acceleration, With<FluidParticle>>,
 ) {
-    let max_acceleration = particles
-        .iter()
-        .fold(0.0f32, |m, a| m.max(a.length_squared()))
-        .sqrt();
+    let max_acceleration = max_acceleration(&particles);
     let solver = &mut *solver;
     let c = solver.constants;
     let stable = stable_time_step(&c, solver.snapshot.max_speed, max_acceleration);
-    let clock = &mut solver.clock;
-    let dt = if solver.snapshot.is_empty() {
-        clock.remaining as f32
-    } else if clock.substeps + 1 >= c.max_substeps {
-        stable.min(clock.remaining as f32)
-    } else {
-        plan_substep(clock.remaining, stable)
-    };
-    clock.dt = dt;
-    clock.stable_dt = stable;
-    clock.max_acceleration = max_acceleration;
-    clock.remaining -= dt as f64;
-    clock.time += dt as f64;
-    clock.substeps += 1;
-    clock.total_substeps += 1;
+    solver.clock.max_acceleration = max_acceleration;
+    solver
+        .clock
+        .take_substep(stable, c.max_substeps, solver.snapshot.is_empty());
 }
 
-/// [`SphSubstepSystems::Integrate`](super::SphSubstepSystems::Integrate): symplectic Euler,
-/// walls and obstacles, per particle in parallel.
+fn max_acceleration(particles: &Query<&Acceleration, With<FluidParticle>>) -> f32 {
+    particles
+        .iter()
+        .fold(0.0f32, |m, a| m.max(a.length_squared()))
+        .sqrt()
+}
+
+/// What the WCSPH integration reads and writes per particle.
+type MoveData = (
+    &'static mut Position,
+    &'static mut Velocity,
+    &'static Acceleration,
+);
+
+/// [`SphSubstepSystems::Integrate`](super::SphSubstepSystems::Integrate) for WCSPH: symplectic
+/// Euler, walls and obstacles, per particle.
 pub(crate) fn integrate_particles(
     mut solver: ResMut<SphSolver>,
-    mut particles: Query<(&mut Position, &mut Velocity, &Acceleration), With<FluidParticle>>,
+    mut particles: Query<MoveData, With<FluidParticle>>,
 ) {
     let non_finite = AtomicU32::new(0);
     {
@@ -521,10 +584,11 @@ pub(crate) fn integrate_particles(
         let c = solver.constants;
         let dt = solver.clock.dt;
         let obstacles = &solver.walls.obstacles;
-        particles
-            .par_iter_mut()
-            .batching_strategy(BATCHING)
-            .for_each(|(mut position, mut velocity, acceleration)| {
+        for_each_particle!(
+            particles,
+            solver.snapshot.len(),
+            MoveData,
+            |(mut position, mut velocity, acceleration): QueryItem<'_, '_, MoveData>| {
                 if !advance_particle(
                     &c,
                     obstacles,
@@ -535,9 +599,167 @@ pub(crate) fn integrate_particles(
                 ) {
                     non_finite.fetch_add(1, Ordering::Relaxed);
                 }
-            });
+            }
+        );
     }
     solver.non_finite += non_finite.into_inner() as u64;
+}
+
+/// [`SphSubstepSystems::Density`](super::SphSubstepSystems::Density) for DFSPH: caches
+/// neighbours and gradients, sums densities, computes the DFSPH factors.
+pub(crate) fn prepare_dfsph(mut solver: ResMut<SphSolver>) {
+    let solver = &mut *solver;
+    let c = solver.constants;
+    let (order, stiffness) = (solver.snapshot.grid().order(), &solver.gathered_stiffness);
+    solver.dfsph.prepare(
+        &c,
+        &solver.snapshot,
+        &solver.walls,
+        |slot| stiffness[order[slot] as usize],
+        &ComputePool,
+    );
+}
+
+/// [`SphSubstepSystems::Density`](super::SphSubstepSystems::Density) for DFSPH, after
+/// [`prepare_dfsph`]: makes the velocity field divergence-free.
+pub(crate) fn solve_divergence(mut solver: ResMut<SphSolver>) {
+    let solver = &mut *solver;
+    let c = solver.constants;
+    let dt = divergence_step(&solver.clock, &c, solver.snapshot.max_speed);
+    let iterations = solver.dfsph.solve_divergence(&c, dt, &ComputePool);
+    solver.iterations.divergence += iterations;
+    solver.iterations.total += iterations as u64;
+}
+
+/// What the DFSPH force pass reads and writes per particle.
+type DfsphForceData = (
+    &'static NeighborSlot,
+    &'static mut Velocity,
+    &'static mut Density,
+    &'static mut Acceleration,
+);
+
+/// [`SphSubstepSystems::Forces`](super::SphSubstepSystems::Forces) for DFSPH: takes the
+/// divergence-free velocity and the density, and sets [`Acceleration`] to gravity and viscosity
+/// (pressure comes from the density solve in `Integrate`, after your external forces).
+pub(crate) fn compute_dfsph_forces(
+    solver: Res<SphSolver>,
+    mut particles: Query<DfsphForceData, With<FluidParticle>>,
+) {
+    let solver = &*solver;
+    let c = solver.constants;
+    let (dfsph, snapshot) = (&solver.dfsph, &solver.snapshot);
+    for_each_particle!(
+        particles,
+        snapshot.len(),
+        DfsphForceData,
+        |(slot, mut velocity, mut density, mut acceleration): QueryItem<'_, '_, DfsphForceData>| {
+            if slot.generation == solver.generation && (slot.slot as usize) < dfsph.len() {
+                let slot = slot.slot as usize;
+                velocity.0 = dfsph.velocity(slot);
+                density.0 = dfsph.density(&c, slot);
+                acceleration.0 = dfsph.non_pressure_acceleration(&c, snapshot, slot);
+            } else {
+                acceleration.0 = c.gravity;
+            }
+        }
+    );
+}
+
+/// [`SphSubstepSystems::Integrate`](super::SphSubstepSystems::Integrate) for DFSPH: takes every
+/// particle's acceleration (external forces included), picks the step from the flow's CFL and
+/// the force limits, and solves for the pressure that keeps the density at rest.
+pub(crate) fn solve_density(
+    mut solver: ResMut<SphSolver>,
+    particles: Query<(&NeighborSlot, &Acceleration), With<FluidParticle>>,
+) {
+    let solver = &mut *solver;
+    let c = solver.constants;
+    let mut accelerations = Vec::new();
+    core::mem::swap(&mut accelerations, &mut solver.gathered_velocity);
+    accelerations.clear();
+    for (slot, acceleration) in &particles {
+        if slot.generation == solver.generation && (slot.slot as usize) < solver.dfsph.len() {
+            solver
+                .dfsph
+                .set_acceleration(slot.slot as usize, acceleration.0);
+        }
+        accelerations.push(acceleration.0);
+    }
+    let max_acceleration = max_length(&accelerations);
+    core::mem::swap(&mut accelerations, &mut solver.gathered_velocity);
+    let stable = solver.dfsph.stable_time_step(&c, max_acceleration);
+    solver.clock.max_acceleration = max_acceleration;
+    let dt = solver
+        .clock
+        .take_substep(stable, c.max_substeps, solver.snapshot.is_empty());
+    let iterations = solver.dfsph.solve_density(&c, dt, &ComputePool);
+    solver.iterations.density += iterations;
+    solver.iterations.total += iterations as u64;
+}
+
+/// What the DFSPH integration reads and writes per particle.
+type DfsphMoveData = (
+    &'static NeighborSlot,
+    &'static mut Position,
+    &'static mut Velocity,
+    &'static mut Pressure,
+    &'static mut Stiffness,
+    &'static Acceleration,
+);
+
+/// [`SphSubstepSystems::Integrate`](super::SphSubstepSystems::Integrate) for DFSPH, after
+/// [`solve_density`]: moves each particle with its solved velocity, keeps it in the tank and out
+/// of obstacles, and stores its pressure and stiffness.
+pub(crate) fn integrate_dfsph(
+    mut solver: ResMut<SphSolver>,
+    mut particles: Query<DfsphMoveData, With<FluidParticle>>,
+) {
+    let non_finite = AtomicU32::new(0);
+    {
+        let solver = &*solver;
+        let c = solver.constants;
+        let dt = solver.clock.dt;
+        let (dfsph, obstacles) = (&solver.dfsph, &solver.walls.obstacles);
+        for_each_particle!(
+            particles,
+            solver.snapshot.len(),
+            DfsphMoveData,
+            |(slot, mut position, mut velocity, mut pressure, mut stiffness, acceleration): QueryItem<
+                '_,
+                '_,
+                DfsphMoveData,
+            >| {
+                let moved = if slot.generation == solver.generation
+                    && (slot.slot as usize) < dfsph.len()
+                {
+                    let slot = slot.slot as usize;
+                    pressure.0 = dfsph.pressure(&c, slot);
+                    stiffness.0 = dfsph.stiffness(slot);
+                    let v = dfsph.velocity(slot);
+                    move_particle(&c, obstacles, &mut position.0, &mut velocity.0, v, dt)
+                } else {
+                    advance_particle(
+                        &c,
+                        obstacles,
+                        &mut position.0,
+                        &mut velocity.0,
+                        acceleration.0,
+                        dt,
+                    )
+                };
+                if !moved {
+                    non_finite.fetch_add(1, Ordering::Relaxed);
+                }
+            }
+        );
+    }
+    solver.non_finite += non_finite.into_inner() as u64;
+}
+
+/// Whether the fluid runs on `solver` (a run condition for the solver-specific systems).
+pub(crate) fn uses_solver(solver: PressureSolver) -> impl Fn(Res<SphSolver>) -> bool + Clone {
+    move |state: Res<SphSolver>| state.constants.solver == solver
 }
 
 /// Fills [`SphStats`] after the tick.
@@ -576,5 +798,10 @@ pub(crate) fn update_stats(
             0.0
         },
         non_finite_resets: solver.non_finite,
+        solver: solver.constants.solver,
+        density_iterations: solver.iterations.density,
+        divergence_iterations: solver.iterations.divergence,
+        total_iterations: solver.iterations.total,
+        solver_density_error: 100.0 * solver.dfsph.report.density_error,
     };
 }
