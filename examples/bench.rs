@@ -6,6 +6,12 @@
 //! cargo run --release --example bench -- --particles 100000 --steps 200 --threads 2
 //! cargo run --release --example bench -- --gravity --bodies 1000000 --steps 5 --threads 2 --theta 1
 //! ```
+//! With `--realtime`, the demo's dam break runs through the ECS for one simulated second and the
+//! last line reads
+//! `realtime solver=S particles=N threads=T sim_s=X wall_s=Y realtime_x=Z substeps_per_sim_s=K iterations_per_substep=I`
+//! (`realtime_x` is simulated seconds per wall second; iterations count both DFSPH solves and are
+//! 0 for WCSPH).
+//!
 //! The fluid's last two lines read
 //! `path=slices|ecs particles=N steps=K threads=T neighbours=X ms_per_step=Y particle_steps_per_s=Z`,
 //! where a step is one solver sub-step and `neighbours` the mean number of particles within the
@@ -20,8 +26,11 @@ mod support;
 
 use bevy::prelude::*;
 use bevy::time::TimeUpdateStrategy;
+use bevy_sph2d::fluid::scenario::SCENARIO_TANK;
 use bevy_sph2d::fluid::slices::SliceFluid;
-use bevy_sph2d::fluid::{FluidBlock, SphParams, SphSolver, Tank};
+use bevy_sph2d::fluid::{
+    FluidBlock, PressureSolver, ScenarioKind, SphParams, SphScenario, SphSolver, Tank,
+};
 use bevy_sph2d::prelude::*;
 use std::time::{Duration, Instant};
 use support::{Args, fail};
@@ -30,6 +39,9 @@ const USAGE: &str = "\
 usage: bench --particles N --steps K [--threads T] [--support-ratio R] [--kernel wendland|cubic|muller]
   a dam break (column 1:2, tank 4 columns wide) of about N particles at 5 mm spacing,
   K sub-steps on each path after 10 warm-up steps
+usage: bench --realtime --particles N [--threads T] [--solver wcsph|dfsph]
+  the demo's dam break (tank 1.6 m x 0.9 m, column 0.48 m x 0.54 m, spacing from N) with the
+  solver's default settings, through the ECS at 64 ticks/s, for 1 simulated second
 usage: bench --gravity --bodies N --steps K [--threads T] [--theta X]
   Barnes-Hut gravity on a disc of N bodies around a heavy centre (G = 1, radius 1 m),
   K fixed ticks through the ECS after one warm-up tick";
@@ -51,12 +63,17 @@ fn main() {
             "kernel",
             "bodies",
             "theta",
+            "solver",
         ],
-        &["gravity"],
+        &["gravity", "realtime"],
     )
     .unwrap_or_else(|e| fail(&e, USAGE));
     if args.flag("gravity") {
         gravity_bench(&args);
+        return;
+    }
+    if args.flag("realtime") {
+        realtime_bench(&args);
         return;
     }
     let run = || -> Result<(usize, usize, usize, SphParams), String> {
@@ -164,6 +181,77 @@ fn main() {
     );
     line("slices", steps, slices_seconds);
     line("ecs", ecs_steps, ecs_seconds);
+}
+
+/// The demo's dam break through the ECS for one simulated second: how fast it runs against the
+/// clock.
+fn realtime_bench(args: &Args) {
+    let run = || -> Result<(u32, usize, PressureSolver), String> {
+        let particles: u32 = args.get("particles", 2_500)?;
+        let threads: usize = args.get("threads", 2)?;
+        if particles == 0 || threads == 0 {
+            return Err("--particles and --threads must be positive".into());
+        }
+        let solver = match args.text("solver").unwrap_or("wcsph") {
+            "wcsph" => PressureSolver::Wcsph,
+            "dfsph" => PressureSolver::Dfsph,
+            other => return Err(format!("unknown solver '{other}' (wcsph or dfsph)")),
+        };
+        Ok((particles, threads, solver))
+    };
+    let (particles, threads, solver) = run().unwrap_or_else(|e| fail(&e, USAGE));
+    let scenario = SphScenario::new(ScenarioKind::DamBreak, particles);
+    let tank = SCENARIO_TANK;
+    let params = SphParams {
+        tank: Some(tank),
+        particle_spacing: scenario.spacing(&tank),
+        solver,
+        // Every sub-step the flow needs: the measure is how long they take, not what a
+        // step budget would drop.
+        max_substeps: 100_000,
+        ..default()
+    };
+    if let Err(error) = params.validate() {
+        fail(&error.to_string(), USAGE);
+    }
+    let mut app = App::new();
+    app.add_plugins((
+        MinimalPlugins.set(bevy_sph2d::task_pool_plugin(threads)),
+        SphPlugin::default().with_params(params.clone()),
+    ))
+    .insert_resource(Time::<Fixed>::from_hz(64.0))
+    .insert_resource(TimeUpdateStrategy::FixedTimesteps(1));
+    for block in scenario.blocks(&tank) {
+        block.spawn(app.world_mut());
+    }
+    app.update();
+    let spawned = app.world().resource::<SphStats>().particles;
+    eprintln!(
+        "dam break: {spawned} particles at {:.4} m spacing, {} solver, {threads} threads",
+        params.particle_spacing,
+        solver.label()
+    );
+    let started = Instant::now();
+    while app.world().resource::<SphSolver>().clock().time < 1.0 {
+        app.update();
+    }
+    let wall = started.elapsed().as_secs_f64();
+    let solver_state = app.world().resource::<SphSolver>();
+    let clock = *solver_state.clock();
+    let iterations = solver_state.iterations().total;
+    let count = app.world().resource::<SphStats>().particles;
+    println!(
+        "realtime solver={} particles={count} threads={threads} sim_s={:.3} wall_s={wall:.3} \
+         realtime_x={:.3} substeps_per_sim_s={:.0} iterations_per_substep={:.2}",
+        match solver {
+            PressureSolver::Wcsph => "wcsph",
+            PressureSolver::Dfsph => "dfsph",
+        },
+        clock.time,
+        clock.time / wall,
+        clock.total_substeps as f64 / clock.time,
+        iterations as f64 / clock.total_substeps.max(1) as f64
+    );
 }
 
 /// Seconds per tick of the gravity plugin on a galaxy disc of `bodies` bodies.

@@ -143,3 +143,35 @@ fn slices_are_deterministic_across_thread_counts() {
     assert_eq!(one, run(2));
     assert_eq!(one, run(5));
 }
+
+#[test]
+fn dfsph_slices_are_deterministic_across_thread_counts() {
+    // Fine enough for several parallel chunks of the solver's passes and sums.
+    let p = SphParams {
+        particle_spacing: 0.003,
+        ..params()
+    };
+    let p = SphParams {
+        solver: dfsph_water().solver,
+        support_ratio: dfsph_water().support_ratio,
+        ..p
+    };
+    let positions = block(1).positions_for(&p);
+    assert!(positions.len() > 2 * bevy_sph2d::fluid::dfsph::CHUNK);
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            let mut fluid = SliceFluid::new(p.constants().unwrap(), positions.clone(), &[]);
+            for _ in 0..8 {
+                fluid.advance(TICK);
+            }
+            (fluid.position, fluid.velocity, fluid.pressure)
+        })
+    };
+    let one = run(1);
+    assert_eq!(one, run(2));
+    assert_eq!(one, run(5));
+}

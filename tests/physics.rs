@@ -29,6 +29,21 @@ fn resting_layer_settles_to_hydrostatic_pressure() {
     );
 }
 
+/// The targets for DFSPH. Measured now: the pressure profile is hydrostatic and steady
+/// (about 1.9 kPa at the floor of a 0.2 m layer, the slope within 1% of ρ₀g), but free-surface
+/// particles keep moving at about 0.1 m/s and interior densities stray by up to 1%.
+#[test]
+#[ignore = "DFSPH is experimental: its resting layer is not yet still (see the test's docs)"]
+fn resting_layer_settles_to_hydrostatic_pressure_dfsph() {
+    resting_layer(
+        dfsph_water(),
+        Hydrostatics {
+            density: 0.005,
+            slope: 0.03,
+        },
+    );
+}
+
 fn resting_layer(base: SphParams, within: Hydrostatics) {
     let depth = 0.2;
     let spacing = 0.01;
@@ -132,6 +147,11 @@ fn dam_break_front_follows_martin_and_moyce() {
     dam_break(SphParams::water());
 }
 
+#[test]
+fn dam_break_front_follows_martin_and_moyce_dfsph() {
+    dam_break(dfsph_water());
+}
+
 fn dam_break(base: SphParams) {
     let a = 0.05;
     let spacing = a / 20.0;
@@ -178,6 +198,10 @@ fn dam_break(base: SphParams) {
     for (t_star, z_exp) in MARTIN_MOYCE {
         let z = interpolate(&history, t_star);
         let ratio = z / z_exp;
+        println!(
+            "{:?} t√(2g/a) = {t_star}: front {z:.3} a, experiment {z_exp} a, ratio {ratio:.3}",
+            params.solver
+        );
         assert!(
             (0.9..=1.25).contains(&ratio),
             "at t√(2g/a) = {t_star}: front at {z:.2} a, experiment {z_exp} a"
@@ -200,6 +224,39 @@ fn interpolate(history: &[(f32, f32)], t: f32) -> f32 {
 #[test]
 fn momentum_is_conserved_without_gravity_or_walls() {
     momentum(SphParams::water());
+}
+
+#[test]
+fn momentum_is_conserved_without_gravity_or_walls_dfsph() {
+    momentum(dfsph_water());
+}
+
+/// The demo's dam break on DFSPH through the impact on the far wall: measured now, the run-up
+/// on the wall throws particles to the speed limit (60 m/s) about 0.6 s in.
+#[test]
+#[ignore = "DFSPH is experimental: it does not yet survive the wall impact (see the test's docs)"]
+fn dam_break_impact_stays_bounded_dfsph() {
+    let tank = Tank::new(1.6, 0.9);
+    let params = SphParams {
+        tank: Some(tank),
+        particle_spacing: 0.0102,
+        ..dfsph_water()
+    };
+    let mut app = create_app(params);
+    spawn(&mut app, FluidBlock::dam_break(0.48, 0.54).with_seed(1));
+    while sim_time(&app) < 1.5 {
+        run(&mut app, 1);
+        let fastest = states(&mut app)
+            .iter()
+            .map(|s| s.velocity.length())
+            .fold(0.0, f32::max);
+        // Twice the collapse's front speed 2√(gH) is as fast as any splash gets.
+        assert!(
+            fastest < 4.0 * (G * 0.54f32).sqrt(),
+            "{fastest} m/s at t = {}",
+            sim_time(&app)
+        );
+    }
 }
 
 fn momentum(base: SphParams) {
@@ -239,14 +296,23 @@ fn momentum(base: SphParams) {
         .sum();
     let before = momentum(&mut app);
     let mut strongest = 0.0f32;
+    let mut last = states(&mut app);
     for _ in 0..12 {
         run(&mut app, 1);
         let s = states(&mut app);
         assert!(all_finite(&s));
+        // DFSPH's pressure acts inside the step (Acceleration holds the other forces): count
+        // the mean acceleration over the tick too.
         strongest = s
             .iter()
-            .map(|p| p.acceleration.length())
+            .zip(&last)
+            .map(|(p, q)| {
+                p.acceleration
+                    .length()
+                    .max((p.velocity - q.velocity).length() / TICK as f32)
+            })
             .fold(strongest, f32::max);
+        last = s;
     }
     let after = momentum(&mut app);
     assert!(strongest > 50.0, "forces should act, max |a| = {strongest}");

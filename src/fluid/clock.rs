@@ -14,6 +14,9 @@
 //!
 //! See [`SphPlugin`](crate::fluid::SphPlugin).
 
+/// The fraction of a tick below which what is left of it counts as done.
+const END_OF_TICK: f64 = 1e-6;
+
 /// How the current tick is being split into sub-steps, and the simulated time so far.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct SubstepClock {
@@ -45,9 +48,12 @@ impl SubstepClock {
         self.substeps = 0;
     }
 
-    /// Whether the tick needs another sub-step and `max_substeps` allows one.
+    /// Whether the tick needs another sub-step and `max_substeps` allows one. What rounding
+    /// leaves of a tick split into `f32` steps (a millionth of it) is not worth a step: an
+    /// implicit solver asked to remove a density error within a sliver of time would answer
+    /// with an enormous pressure.
     pub fn wants_substep(&self, max_substeps: u32) -> bool {
-        self.remaining > 1e-9 * self.tick && self.substeps < max_substeps
+        self.remaining > END_OF_TICK * self.tick && self.substeps < max_substeps
     }
 
     /// Takes the next sub-step given the stability limit `stable` (s) and returns its length:
@@ -76,7 +82,7 @@ impl SubstepClock {
 
     /// Ends the tick; time it could not cover counts as dropped.
     pub fn end_tick(&mut self) {
-        if self.remaining > 1e-9 * self.tick {
+        if self.remaining > END_OF_TICK * self.tick {
             self.dropped += self.remaining;
         }
         self.remaining = 0.0;

@@ -98,11 +98,11 @@ impl PressureSolver {
 
 /// Settings of the divergence-free solver ([`PressureSolver::Dfsph`]).
 ///
-/// Each sub-step makes the velocity field divergence-free (a Jacobi solve to
+/// Each sub-step makes the velocity field divergence-free (a pressure solve to
 /// `divergence_tolerance`), adds gravity, viscosity and external forces, then solves for the
 /// pressure that brings the predicted density back to rest (to `density_tolerance`), and moves
-/// the particles. Both solves start from the last sub-step's pressures (`warm_start`), so a
-/// resting pool converges in the minimum of iterations.
+/// the particles. Both solves start from the last sub-step's pressures (`warm_start`). See
+/// [`dfsph`](crate::fluid::dfsph) for the method and what it does not do yet.
 #[derive(Reflect, Debug, Clone, Copy, PartialEq)]
 #[reflect(Default, Debug, PartialEq)]
 pub struct DfsphSettings {
@@ -111,7 +111,8 @@ pub struct DfsphSettings {
     pub cfl_number: f32,
     /// Longest sub-step, s (the limit when the fluid is at rest).
     pub max_time_step: f32,
-    /// Mean compression `(ρ − ρ₀)/ρ₀` the density solve stops at, as a fraction (0.001 = 0.1%).
+    /// Mean predicted density error `|ρ − ρ₀|/ρ₀` the density solve stops at, as a fraction
+    /// (0.0001 = 0.01%).
     pub density_tolerance: f32,
     /// Mean density change over one step `dt (Dρ/Dt)/ρ₀` the divergence solve stops at, as a
     /// fraction (0.01 = 1%).
@@ -129,7 +130,7 @@ impl Default for DfsphSettings {
         Self {
             cfl_number: 0.5,
             max_time_step: 0.005,
-            density_tolerance: 0.001,
+            density_tolerance: 0.0001,
             divergence_tolerance: 0.01,
             max_density_iterations: 100,
             max_divergence_iterations: 100,

@@ -606,7 +606,7 @@ pub(crate) fn integrate_particles(
 }
 
 /// [`SphSubstepSystems::Density`](super::SphSubstepSystems::Density) for DFSPH: caches
-/// neighbours and gradients, sums densities, computes the DFSPH factors.
+/// neighbours and gradients, sums densities.
 pub(crate) fn prepare_dfsph(mut solver: ResMut<SphSolver>) {
     let solver = &mut *solver;
     let c = solver.constants;
