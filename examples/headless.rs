@@ -14,7 +14,9 @@ mod support;
 
 use bevy::prelude::*;
 use bevy::time::TimeUpdateStrategy;
-use bevy_sph2d::fluid::{FluidBlock, SphParams, SphSolver, Tank, refresh_fluid_state};
+use bevy_sph2d::fluid::{
+    FluidBlock, PressureSolver, SphParams, SphSolver, Tank, refresh_fluid_state,
+};
 use bevy_sph2d::gravity::GravityAcceleration;
 use bevy_sph2d::prelude::*;
 use std::io::{BufWriter, Write};
@@ -35,7 +37,8 @@ usage: headless [options]
   --seed N                    jitter seed (default 0)
   --out FILE.csv              output file (default headless.csv)
   --jitter J                  spawn jitter, fraction of the spacing (default 0.0001)
-  --support-ratio R           kernel support / spacing (default 3)
+  --solver wcsph|dfsph        pressure solver (default wcsph; dfsph is experimental)
+  --support-ratio R           kernel support / spacing (default 3 for wcsph, 2.5 for dfsph)
   --kernel wendland|cubic|muller   (default wendland)
   --speed-of-sound C          m/s (default 20 sqrt(g * fluid height))
   --viscosity NU              kinematic viscosity, m^2/s (default 1e-6)
@@ -50,6 +53,7 @@ galaxy options:
   --softening E               m (default 0.01)";
 
 const VALUED: &[&str] = &[
+    "solver",
     "scenario",
     "column-width",
     "column-height",
@@ -120,9 +124,15 @@ fn configure(args: &Args) -> Result<Config, String> {
         "muller" => KernelKind::Muller,
         other => return Err(format!("unknown kernel '{other}'")),
     };
+    let (solver, default_ratio) = match args.text("solver").unwrap_or("wcsph") {
+        "wcsph" => (PressureSolver::Wcsph, 3.0),
+        "dfsph" => (PressureSolver::Dfsph, 2.5),
+        other => return Err(format!("unknown solver '{other}' (wcsph or dfsph)")),
+    };
     let params = SphParams {
         particle_spacing: args.positive("spacing", default_spacing)?,
-        support_ratio: args.positive("support-ratio", 3.0)?,
+        support_ratio: args.positive("support-ratio", default_ratio)?,
+        solver,
         kernel,
         speed_of_sound: args.positive(
             "speed-of-sound",
