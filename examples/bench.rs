@@ -37,6 +37,7 @@ use support::{Args, fail};
 
 const USAGE: &str = "\
 usage: bench --particles N --steps K [--threads T] [--support-ratio R] [--kernel wendland|cubic|muller]
+             [--solver wcsph|dfsph]
   a dam break (column 1:2, tank 4 columns wide) of about N particles at 5 mm spacing,
   K sub-steps on each path after 10 warm-up steps
 usage: bench --realtime --particles N [--threads T] [--solver wcsph|dfsph]
@@ -89,6 +90,11 @@ fn main() {
             "muller" => KernelKind::Muller,
             other => return Err(format!("unknown kernel '{other}'")),
         };
+        let solver = match args.text("solver").unwrap_or("wcsph") {
+            "wcsph" => PressureSolver::Wcsph,
+            "dfsph" => PressureSolver::Dfsph,
+            other => return Err(format!("unknown solver '{other}' (wcsph or dfsph)")),
+        };
         let spacing = 0.005f32;
         let columns = ((particles as f32 / 2.0).sqrt().round() as usize).max(1);
         let rows = particles.div_ceil(columns);
@@ -97,6 +103,7 @@ fn main() {
             particle_spacing: spacing,
             support_ratio: args.positive("support-ratio", 2.0)?,
             kernel,
+            solver,
             speed_of_sound: SphParams::speed_of_sound_for_height(column.y),
             tank: Some(Tank::new(4.0 * column.x, 1.25 * column.y)),
             max_substeps: SUBSTEPS_PER_TICK,
@@ -113,13 +120,14 @@ fn main() {
     assert_eq!(positions.len(), particles);
     eprintln!(
         "dam break: {particles} particles, column {:.2} m x {:.2} m, tank {:.2} m x {:.2} m, \
-         support ratio {}, {} kernel, {threads} threads",
+         support ratio {}, {} kernel, {} solver, {threads} threads",
         column.x,
         column.y,
         tank.width,
         tank.height,
         params.support_ratio,
-        params.kernel.label()
+        params.kernel.label(),
+        params.solver.label()
     );
 
     // Plain slices on a rayon pool of `threads` threads.
@@ -225,9 +233,8 @@ fn realtime_bench(args: &Args) {
         block.spawn(app.world_mut());
     }
     app.update();
-    let spawned = app.world().resource::<SphStats>().particles;
     eprintln!(
-        "dam break: {spawned} particles at {:.4} m spacing, {} solver, {threads} threads",
+        "dam break at {:.4} m spacing, {} solver, {threads} threads",
         params.particle_spacing,
         solver.label()
     );

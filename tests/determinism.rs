@@ -146,9 +146,9 @@ fn slices_are_deterministic_across_thread_counts() {
 
 #[test]
 fn dfsph_slices_are_deterministic_across_thread_counts() {
-    // Fine enough for several parallel chunks of the solver's passes and sums.
+    // Fine enough for the solver's passes to run in parallel chunks.
     let p = SphParams {
-        particle_spacing: 0.003,
+        particle_spacing: 0.0022,
         ..params()
     };
     let p = SphParams {
@@ -157,7 +157,7 @@ fn dfsph_slices_are_deterministic_across_thread_counts() {
         ..p
     };
     let positions = block(1).positions_for(&p);
-    assert!(positions.len() > 2 * bevy_sph2d::fluid::dfsph::CHUNK);
+    assert!(positions.len() > bevy_sph2d::fluid::dfsph::PARALLEL_SLOTS);
     let run = |threads: usize| {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)

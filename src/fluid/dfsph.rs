@@ -59,6 +59,10 @@ use bevy::math::{Vec2, Vec4};
 /// waking a second thread.
 pub const CHUNK: usize = 2048;
 
+/// Fewest particles whose passes run in parallel (measured with the `bench` example: at 2,500
+/// particles the ECS path, on Bevy's task pool, ran 3.6 times slower than on one thread).
+pub const PARALLEL_SLOTS: usize = 8192;
+
 /// Walls mirror the fluid next to them: its pressure (Akinci et al. 2012, with the hydrostatic
 /// head of Adami et al. 2012) and its velocity towards them, so a wall particle counts twice its
 /// one-sided share.
@@ -215,6 +219,7 @@ impl Dfsph {
         stride: usize,
         parallel: &impl Parallel,
     ) -> bool {
+        let n = self.state.len();
         let chunk = CHUNK;
         let scaled_volume = c.gradient_scale * c.volume;
         let support_sq = Vec4::splat(c.support_sq);
@@ -227,7 +232,7 @@ impl Dfsph {
             .enumerate()
             .map(|(k, (state, rows))| (k * chunk, state, rows, false))
             .collect();
-        parallel.for_each(&mut jobs, |(start, states, rows, overflow)| {
+        run_jobs(parallel, n, &mut jobs, |(start, states, rows, overflow)| {
             for (k, state) in states.iter_mut().enumerate() {
                 let x = fluid.points.get(*start + k);
                 let row = &mut rows[k * stride..(k + 1) * stride];
@@ -447,7 +452,7 @@ impl Dfsph {
                 .map(|(k, (x, r))| (k * CHUNK, x, r, 0.0f64, 0.0f64))
                 .collect();
             let (p_ref, q_ref) = (&direction, &q);
-            parallel.for_each(&mut jobs, |(start, xs, rs, rz, abs)| {
+            run_jobs(parallel, n, &mut jobs, |(start, xs, rs, rz, abs)| {
                 for (k, (x, r)) in xs.iter_mut().zip(rs.iter_mut()).enumerate() {
                     let slot = *start + k;
                     *x += step * p_ref[slot];
@@ -645,6 +650,22 @@ fn pressure_push(rows: &[Neighbor], stride: usize, s: SlotState, slot: usize, x:
     push
 }
 
+/// Runs the jobs of a pass over `slots` particles: on `parallel` from [`PARALLEL_SLOTS`] on, on
+/// the calling thread below (waking a pool's threads costs more than a small pass). The jobs are
+/// the same either way, so are the sums.
+fn run_jobs<T: Send>(
+    parallel: &impl Parallel,
+    slots: usize,
+    jobs: &mut [T],
+    work: impl Fn(&mut T) + Sync,
+) {
+    if slots < PARALLEL_SLOTS {
+        jobs.iter_mut().for_each(work);
+    } else {
+        parallel.for_each(jobs, work);
+    }
+}
+
 /// Runs `work(slot, &mut out[slot])` for every slot, in parallel chunks of [`CHUNK`] slots, and
 /// returns the sum of what it returns, added chunk by chunk in slot order: the same on any
 /// number of threads.
@@ -653,12 +674,13 @@ fn for_each_slot<T: Send>(
     parallel: &impl Parallel,
     work: impl Fn(usize, &mut T) -> f64 + Sync,
 ) -> f64 {
+    let n = out.len();
     let mut jobs: Vec<_> = out
         .chunks_mut(CHUNK)
         .enumerate()
         .map(|(k, values)| (k * CHUNK, values, 0.0f64))
         .collect();
-    parallel.for_each(&mut jobs, |(start, values, sum)| {
+    run_jobs(parallel, n, &mut jobs, |(start, values, sum)| {
         for (k, value) in values.iter_mut().enumerate() {
             *sum += work(*start + k, value);
         }
@@ -673,7 +695,7 @@ fn chunk_sums(a: &[f32], b: &[f32], parallel: &impl Parallel) -> f64 {
         .zip(b.chunks(CHUNK))
         .map(|(a, b)| (a, b, 0.0f64))
         .collect();
-    parallel.for_each(&mut jobs, |(a, b, sum)| {
+    run_jobs(parallel, a.len(), &mut jobs, |(a, b, sum)| {
         *sum = a
             .iter()
             .zip(b.iter())

@@ -520,6 +520,27 @@ mod tests {
             ("cfl_number", Box::new(|p| p.cfl_number = 0.0)),
             ("max_substeps", Box::new(|p| p.max_substeps = 0)),
             ("wall_restitution", Box::new(|p| p.wall_restitution = 1.5)),
+            ("dfsph.cfl_number", Box::new(|p| p.dfsph.cfl_number = 0.0)),
+            (
+                "dfsph.max_time_step",
+                Box::new(|p| p.dfsph.max_time_step = -1.0),
+            ),
+            (
+                "dfsph.density_tolerance",
+                Box::new(|p| p.dfsph.density_tolerance = f32::NAN),
+            ),
+            (
+                "dfsph.divergence_tolerance",
+                Box::new(|p| p.dfsph.divergence_tolerance = 2.0),
+            ),
+            (
+                "dfsph.max_density_iterations",
+                Box::new(|p| p.dfsph.max_density_iterations = 0),
+            ),
+            (
+                "dfsph.max_divergence_iterations",
+                Box::new(|p| p.dfsph.max_divergence_iterations = 20_000),
+            ),
             (
                 "tank.width",
                 Box::new(|p| p.tank = Some(Tank::new(-1.0, 1.0))),

@@ -4,7 +4,9 @@
 mod widgets;
 
 use crate::control::{ResetSimulation, SimulationControl};
-use crate::fluid::{KernelKind, ScenarioKind, SphParams, SphParamsStatus, SphScenario, SphStats};
+use crate::fluid::{
+    KernelKind, PressureSolver, ScenarioKind, SphParams, SphParamsStatus, SphScenario, SphStats,
+};
 use crate::gravity::{GravityParams, GravityStats};
 use crate::interact::{Pointer, PointerSettings, PointerTool};
 use crate::render::{BodyColor, BodyView, ColorMap, ParticleView, RenderMode, ViewInsets};
@@ -237,6 +239,21 @@ fn stats_section(ui: &mut egui::Ui, data: &PanelData, stats: &SphStats) {
                 ),
             );
             row("max speed", format!("{:.2} m/s", stats.max_speed));
+            if stats.solver == PressureSolver::Dfsph {
+                let per_substep = |n: u32| n as f32 / stats.substeps.max(1) as f32;
+                row(
+                    "iterations / sub-step",
+                    format!(
+                        "density {:.1}, divergence {:.1}",
+                        per_substep(stats.density_iterations),
+                        per_substep(stats.divergence_iterations)
+                    ),
+                );
+                row(
+                    "solver density error",
+                    format!("{:.3} %", stats.solver_density_error),
+                );
+            }
             row("sim time", format!("{:.2} s", stats.time));
             row("fps", format!("{:.0}", rates.fps));
             stat_grid(ui, "stats", rows);
@@ -298,6 +315,8 @@ fn fluid_section(ui: &mut egui::Ui, data: &mut PanelData) {
                     gravity: current.gravity,
                     tank: current.tank,
                     max_substeps: current.max_substeps,
+                    solver: current.solver,
+                    dfsph: current.dfsph,
                     speed_of_sound: if preset.background_pressure > 0.0 {
                         preset.speed_of_sound
                     } else {
@@ -407,7 +426,22 @@ fn fluid_section(ui: &mut egui::Ui, data: &mut PanelData) {
                 param_slider(ui, &mut tank.width, 0.1..=10.0, "tank width", "m", true);
                 param_slider(ui, &mut tank.height, 0.1..=10.0, "tank height", "m", true);
             }
-            param_slider(ui, &mut p.cfl_number, 0.05..=1.0, "CFL number", "", false);
+            enum_combo(
+                ui,
+                "pressure solver",
+                &mut p.solver,
+                &PressureSolver::ALL,
+                |s| match s {
+                    PressureSolver::Wcsph => "WCSPH",
+                    PressureSolver::Dfsph => "DFSPH (experimental)",
+                },
+            );
+            match p.solver {
+                PressureSolver::Wcsph => {
+                    param_slider(ui, &mut p.cfl_number, 0.05..=1.0, "CFL number", "", false);
+                }
+                PressureSolver::Dfsph => dfsph_settings(ui, &mut p),
+            }
             ui.add(
                 egui::Slider::new(&mut p.max_substeps, 1..=2000)
                     .logarithmic(true)
@@ -435,6 +469,46 @@ fn fluid_section(ui: &mut egui::Ui, data: &mut PanelData) {
                 );
             }
         });
+}
+
+/// The divergence-free solver's settings.
+fn dfsph_settings(ui: &mut egui::Ui, p: &mut SphParams) {
+    let d = &mut p.dfsph;
+    param_slider(ui, &mut d.cfl_number, 0.05..=1.0, "flow CFL C", "", false);
+    param_slider(
+        ui,
+        &mut d.max_time_step,
+        1.0e-4..=0.02,
+        "longest sub-step",
+        "s",
+        true,
+    );
+    param_slider(
+        ui,
+        &mut d.density_tolerance,
+        1.0e-6..=0.01,
+        "density tolerance",
+        "",
+        true,
+    );
+    param_slider(
+        ui,
+        &mut d.divergence_tolerance,
+        1.0e-5..=0.1,
+        "divergence tolerance",
+        "",
+        true,
+    );
+    ui.add(
+        egui::Slider::new(&mut d.max_density_iterations, 1..=500)
+            .logarithmic(true)
+            .text("max density iterations"),
+    );
+    ui.add(
+        egui::Slider::new(&mut d.max_divergence_iterations, 0..=500)
+            .text("max divergence iterations"),
+    );
+    ui.checkbox(&mut d.warm_start, "warm start");
 }
 
 fn gravity_section(ui: &mut egui::Ui, data: &mut PanelData) {
