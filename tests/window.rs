@@ -39,6 +39,9 @@ struct Script {
     sim_time_at_press: f64,
     xdotool: bool,
     verdict: Option<Result<String, String>>,
+    /// Frames, real time (s) and simulated time (s) since the layer settled.
+    frames: u64,
+    measured_from: Option<(f32, f64)>,
 }
 
 #[derive(Default, PartialEq, Debug, Clone, Copy)]
@@ -146,6 +149,9 @@ fn script(
         return;
     }
     let (camera, camera_transform) = *camera;
+    if script.phase != Phase::Settle {
+        script.frames += 1;
+    }
     match script.phase {
         // Let the window open, the shaders compile and the layer settle.
         Phase::Settle => {
@@ -157,6 +163,7 @@ fn script(
             };
             script.lifted_before = lifted_near_target(&particles).0;
             script.sim_time_at_press = stats.time;
+            script.measured_from = Some((now, stats.time));
             let (x, y) = (cursor.x.round() as i32, cursor.y.round() as i32);
             if script.xdotool {
                 let moved = xdotool(&[
@@ -213,6 +220,15 @@ fn script(
         }
         Phase::Shot => {}
         Phase::Done => {
+            if let Some((real, sim)) = script.measured_from {
+                let elapsed = (now - real).max(1e-3);
+                println!(
+                    "window: fps={:.1} sim_speed={:.2} particles={}",
+                    script.frames as f32 / elapsed,
+                    (stats.time - sim) as f32 / elapsed,
+                    stats.particles
+                );
+            }
             if let Ok(mut verdict) = VERDICT.lock() {
                 *verdict = script.verdict.clone();
             }
