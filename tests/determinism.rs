@@ -165,7 +165,7 @@ fn dfsph_slices_are_deterministic_across_thread_counts() {
             .unwrap();
         pool.install(|| {
             let mut fluid = SliceFluid::new(p.constants().unwrap(), positions.clone(), &[]);
-            for _ in 0..8 {
+            for _ in 0..5 {
                 fluid.advance(TICK);
             }
             (fluid.position, fluid.velocity, fluid.pressure)
