@@ -239,14 +239,25 @@ fn realtime_bench(args: &Args) {
         solver.label()
     );
     let started = Instant::now();
+    let (mut density_iterations, mut divergence_iterations) = (0u64, 0u64);
     while app.world().resource::<SphSolver>().clock().time < 1.0 {
         app.update();
+        let stats = app.world().resource::<SphStats>();
+        density_iterations += stats.density_iterations as u64;
+        divergence_iterations += stats.divergence_iterations as u64;
     }
     let wall = started.elapsed().as_secs_f64();
     let solver_state = app.world().resource::<SphSolver>();
     let clock = *solver_state.clock();
     let iterations = solver_state.iterations().total;
     let count = app.world().resource::<SphStats>().particles;
+    if solver == PressureSolver::Dfsph {
+        eprintln!(
+            "iterations per sub-step: density {:.2}, divergence {:.2}",
+            density_iterations as f64 / clock.total_substeps.max(1) as f64,
+            divergence_iterations as f64 / clock.total_substeps.max(1) as f64
+        );
+    }
     println!(
         "realtime solver={} particles={count} threads={threads} sim_s={:.3} wall_s={wall:.3} \
          realtime_x={:.3} substeps_per_sim_s={:.0} iterations_per_substep={:.2}",

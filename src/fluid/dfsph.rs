@@ -463,8 +463,7 @@ impl Dfsph {
         let mut best_error = error;
         let mut iterations = 0;
         while (error > tolerance || iterations < min_iterations) && iterations < max_iterations {
-            self.multiply(&direction, &mut q, parallel);
-            let pq: f64 = chunk_sums(&direction, &q, parallel);
+            let pq = self.multiply(&direction, &mut q, parallel);
             if pq <= 0.0 || !pq.is_finite() {
                 break;
             }
@@ -525,26 +524,27 @@ impl Dfsph {
     /// `out = −∇²x` on the active particles by the SPH Laplacian (Brookshaw 1985; Morris et al.
     /// 1997), `Σⱼ wᵢⱼ (xᵢ − xⱼ)`, with `x` held at zero at the free surface and mirrored at walls
     /// (no wall term); `out = x` on the others.
-    fn multiply(&mut self, x: &[f32], out: &mut Vec<f32>, parallel: &impl Parallel) {
+    /// Returns `x·out` (f64, chunk by chunk).
+    fn multiply(&mut self, x: &[f32], out: &mut Vec<f32>, parallel: &impl Parallel) -> f64 {
         let n = self.state.len();
         let (rows, state) = (&self.rows, &self.state);
         let stride = self.stride;
         out.resize(n, 0.0);
         for_each_slot(out, parallel, |slot, out| {
             let s = state[slot];
-            if !s.active() {
-                *out = x[slot];
-                return 0.0;
-            }
             let own = x[slot];
+            if !s.active() {
+                *out = own;
+                return (own as f64) * (own as f64);
+            }
             let row = &rows[slot * stride..slot * stride + s.count as usize];
             let mut sum = s.air * own;
             for neighbor in row {
                 sum += neighbor.weight * (own - x[neighbor.slot as usize]);
             }
             *out = sum;
-            0.0
-        });
+            (own as f64) * (sum as f64)
+        })
     }
 
     /// Changes the velocities by the target stiffness' pressure accelerations over `dt`.
@@ -739,23 +739,6 @@ fn for_each_slot<T: Send>(
         for (k, value) in values.iter_mut().enumerate() {
             *sum += work(*start + k, value);
         }
-    });
-    jobs.iter().map(|job| job.2).sum()
-}
-
-/// `Σ aᵢbᵢ` in f64, chunk by chunk in slot order.
-fn chunk_sums(a: &[f32], b: &[f32], parallel: &impl Parallel) -> f64 {
-    let mut jobs: Vec<_> = a
-        .chunks(CHUNK)
-        .zip(b.chunks(CHUNK))
-        .map(|(a, b)| (a, b, 0.0f64))
-        .collect();
-    run_jobs(parallel, a.len(), &mut jobs, |(a, b, sum)| {
-        *sum = a
-            .iter()
-            .zip(b.iter())
-            .map(|(a, b)| (*a as f64) * (*b as f64))
-            .sum();
     });
     jobs.iter().map(|job| job.2).sum()
 }
