@@ -149,23 +149,11 @@ impl NeighborData {
     }
 }
 
-/// Density and `p/ρ²` of every fluid particle by sorted slot, one atomic word each, so that the
+/// Density and `p/ρ²` of every fluid particle by sorted slot (a [`SlotVectors`]), so that the
 /// density pass, running in parallel over particles in any order, can store each particle's
-/// values at its slot while nothing else writes there. Relaxed atomic loads and stores compile
-/// to plain moves.
-#[derive(Debug, Default)]
-pub struct PressureSlots(Vec<AtomicU64>);
-
-impl Clone for PressureSlots {
-    fn clone(&self) -> Self {
-        Self(
-            self.0
-                .iter()
-                .map(|v| AtomicU64::new(v.load(Ordering::Relaxed)))
-                .collect(),
-        )
-    }
-}
+/// values at its slot while nothing else writes there.
+#[derive(Debug, Clone, Default)]
+pub struct PressureSlots(SlotVectors);
 
 impl PressureSlots {
     /// Stores density (kg/m³) and pressure (Pa) at `slot`; a non-positive density counts as no
@@ -177,17 +165,13 @@ impl PressureSlots {
         } else {
             0.0
         };
-        self.0[slot].store(pack(density, term), Ordering::Relaxed);
+        self.0.set(slot, Vec2::new(density, term));
     }
 
     /// Density (kg/m³) and `p/ρ²` at `slot`.
     #[inline]
     pub fn get(&self, slot: usize) -> (f32, f32) {
-        let word = self.0[slot].load(Ordering::Relaxed);
-        (
-            f32::from_bits(word as u32),
-            f32::from_bits((word >> 32) as u32),
-        )
+        self.0.get(slot).into()
     }
 }
 
@@ -197,8 +181,9 @@ fn pack(low: f32, high: f32) -> u64 {
     u64::from(low.to_bits()) | (u64::from(high.to_bits()) << 32)
 }
 
-/// A `Vec2` per sorted slot, one atomic word each, for the same reason as [`PressureSlots`]:
-/// a parallel loop over particles in any order stores each particle's value at its own slot.
+/// A `Vec2` per sorted slot, one atomic word each: a parallel loop over particles in any order
+/// stores each particle's value at its own slot while nothing else writes there. Relaxed atomic
+/// loads and stores compile to plain moves.
 #[derive(Debug, Default)]
 pub struct SlotVectors(Vec<AtomicU64>);
 
@@ -279,6 +264,7 @@ impl FluidSnapshot {
         self.kinematics.resize(n + LANES, far);
         self.pressure
             .0
+            .0
             .resize_with(n + LANES, || AtomicU64::new(at_rest));
         let chunk = chunk_size(n, 16, 4096);
         let order = points.grid.order();
@@ -287,7 +273,7 @@ impl FluidSnapshot {
             .zip(points.x.chunks_mut(chunk))
             .zip(points.y.chunks_mut(chunk))
             .zip(self.kinematics.chunks_mut(chunk))
-            .zip(self.pressure.0.chunks(chunk))
+            .zip(self.pressure.0.0.chunks(chunk))
             .map(|((((order, x), y), kinematics), pressure)| {
                 (order, x, y, kinematics, pressure, 0.0f32)
             })
@@ -309,7 +295,7 @@ impl FluidSnapshot {
         points.x[n..].fill(FAR);
         points.y[n..].fill(FAR);
         self.kinematics[n..].fill(far);
-        for padding in &self.pressure.0[n..] {
+        for padding in &self.pressure.0.0[n..] {
             padding.store(at_rest, Ordering::Relaxed);
         }
     }
