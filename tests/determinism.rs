@@ -122,21 +122,25 @@ fn ecs_is_deterministic_across_thread_counts() {
     assert_eq!(fingerprints[0].0, format!("fingerprint={here}"));
 }
 
-#[test]
-fn slices_are_deterministic_across_thread_counts() {
+/// Runs `positions` on plain slices for `ticks` ticks on rayon pools of 1, 2 and 5 threads and
+/// checks the final positions, velocities, densities and pressures agree bit for bit.
+fn check_slices_across_thread_counts(p: &SphParams, positions: &[Vec2], ticks: usize) {
     let run = |threads: usize| {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()
             .unwrap();
         pool.install(|| {
-            let p = params();
-            let mut fluid =
-                SliceFluid::new(p.constants().unwrap(), block(1).positions_for(&p), &[]);
-            for _ in 0..25 {
+            let mut fluid = SliceFluid::new(p.constants().unwrap(), positions.to_vec(), &[]);
+            for _ in 0..ticks {
                 fluid.advance(TICK);
             }
-            (fluid.position, fluid.velocity, fluid.density)
+            (
+                fluid.position,
+                fluid.velocity,
+                fluid.density,
+                fluid.pressure,
+            )
         })
     };
     let one = run(1);
@@ -145,33 +149,21 @@ fn slices_are_deterministic_across_thread_counts() {
 }
 
 #[test]
+fn slices_are_deterministic_across_thread_counts() {
+    let p = params();
+    check_slices_across_thread_counts(&p, &block(1).positions_for(&p), 25);
+}
+
+#[test]
 fn dfsph_slices_are_deterministic_across_thread_counts() {
     // Fine enough for the solver's passes to run in parallel chunks.
     let p = SphParams {
         particle_spacing: 0.0022,
-        ..params()
-    };
-    let p = SphParams {
         solver: dfsph_water().solver,
         support_ratio: dfsph_water().support_ratio,
-        ..p
+        ..params()
     };
     let positions = block(1).positions_for(&p);
     assert!(positions.len() > bevy_sph2d::fluid::dfsph::PARALLEL_SLOTS);
-    let run = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
-        pool.install(|| {
-            let mut fluid = SliceFluid::new(p.constants().unwrap(), positions.clone(), &[]);
-            for _ in 0..5 {
-                fluid.advance(TICK);
-            }
-            (fluid.position, fluid.velocity, fluid.pressure)
-        })
-    };
-    let one = run(1);
-    assert_eq!(one, run(2));
-    assert_eq!(one, run(5));
+    check_slices_across_thread_counts(&p, &positions, 5);
 }

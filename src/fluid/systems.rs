@@ -13,7 +13,7 @@ use super::dfsph::Dfsph;
 use super::layout::{FluidSnapshot, Walls};
 use super::parallel::Parallel;
 use super::params::{PressureSolver, SphParams, SphParamsError};
-use super::slices::{divergence_step, max_length};
+use super::slices::divergence_step;
 use super::solver::{
     SphConstants, advance_particle, density_and_neighbors_at, move_particle, with_kernels,
 };
@@ -153,6 +153,13 @@ impl SphSolver {
     /// What the last DFSPH sub-step's solves did.
     pub fn dfsph_report(&self) -> &super::dfsph::DfsphReport {
         &self.dfsph.report
+    }
+
+    /// The particle's slot in this sub-step's DFSPH state, if it was in the snapshot (a particle
+    /// spawned since has none).
+    fn dfsph_slot(&self, slot: &NeighborSlot) -> Option<usize> {
+        let index = slot.slot as usize;
+        (slot.generation == self.generation && index < self.dfsph.len()).then_some(index)
     }
 
     /// Starts simulated time again from zero (after a reset).
@@ -654,8 +661,7 @@ pub(crate) fn compute_dfsph_forces(
         snapshot.len(),
         DfsphForceData,
         |(slot, mut velocity, mut density, mut acceleration): QueryItem<'_, '_, DfsphForceData>| {
-            if slot.generation == solver.generation && (slot.slot as usize) < dfsph.len() {
-                let slot = slot.slot as usize;
+            if let Some(slot) = solver.dfsph_slot(slot) {
                 velocity.0 = dfsph.velocity(slot);
                 density.0 = dfsph.density(&c, slot);
                 acceleration.0 = dfsph.non_pressure_acceleration(&c, snapshot, slot);
@@ -675,19 +681,14 @@ pub(crate) fn solve_density(
 ) {
     let solver = &mut *solver;
     let c = solver.constants;
-    let mut accelerations = Vec::new();
-    core::mem::swap(&mut accelerations, &mut solver.gathered_velocity);
-    accelerations.clear();
+    let mut max_sq = 0.0f32;
     for (slot, acceleration) in &particles {
-        if slot.generation == solver.generation && (slot.slot as usize) < solver.dfsph.len() {
-            solver
-                .dfsph
-                .set_acceleration(slot.slot as usize, acceleration.0);
+        if let Some(slot) = solver.dfsph_slot(slot) {
+            solver.dfsph.set_acceleration(slot, acceleration.0);
         }
-        accelerations.push(acceleration.0);
+        max_sq = max_sq.max(acceleration.length_squared());
     }
-    let max_acceleration = max_length(&accelerations);
-    core::mem::swap(&mut accelerations, &mut solver.gathered_velocity);
+    let max_acceleration = max_sq.sqrt();
     let stable = solver.dfsph.stable_time_step(&c, max_acceleration);
     solver.clock.max_acceleration = max_acceleration;
     let dt = solver
@@ -730,10 +731,7 @@ pub(crate) fn integrate_dfsph(
                 '_,
                 DfsphMoveData,
             >| {
-                let moved = if slot.generation == solver.generation
-                    && (slot.slot as usize) < dfsph.len()
-                {
-                    let slot = slot.slot as usize;
+                let moved = if let Some(slot) = solver.dfsph_slot(slot) {
                     pressure.0 = dfsph.pressure(&c, slot);
                     stiffness.0 = dfsph.stiffness(slot);
                     let v = dfsph.velocity(slot);
