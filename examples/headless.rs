@@ -37,7 +37,7 @@ usage: headless [options]
   --seed N                    jitter seed (default 0)
   --out FILE.csv              output file (default headless.csv)
   --jitter J                  spawn jitter, fraction of the spacing (default 0.0001)
-  --solver wcsph|dfsph        pressure solver (default wcsph; dfsph is experimental)
+  --solver dfsph|wcsph        pressure solver (default dfsph, incompressible)
   --support-ratio R           kernel support / spacing (default 3 for wcsph, 2.5 for dfsph)
   --kernel wendland|cubic|muller   (default wendland)
   --speed-of-sound C          m/s (default 20 sqrt(g * fluid height))
@@ -124,7 +124,7 @@ fn configure(args: &Args) -> Result<Config, String> {
         "muller" => KernelKind::Muller,
         other => return Err(format!("unknown kernel '{other}'")),
     };
-    let (solver, default_ratio) = match args.text("solver").unwrap_or("wcsph") {
+    let (solver, default_ratio) = match args.text("solver").unwrap_or("dfsph") {
         "wcsph" => (PressureSolver::Wcsph, 3.0),
         "dfsph" => (PressureSolver::Dfsph, 2.5),
         other => return Err(format!("unknown solver '{other}' (wcsph or dfsph)")),

@@ -27,11 +27,12 @@ impl SphDemoPlugin {
     }
 }
 
-/// Water tuned for interactive use in the scenario tank (1.6 m × 0.9 m):
-/// - speed of sound 30 m/s, about six times the fastest flow of its dam break (4.6 m/s), so
-///   density stays within about 3% of rest (the accurate default, `20 √(g H)` = 46 m/s, costs
-///   1.5 times the sub-steps);
-/// - support 2.5 spacings (about 20 neighbours; the default 3 is more accurate and 40% dearer);
+/// Water tuned for interactive use in the scenario tank (1.6 m × 0.9 m), on the default
+/// incompressible solver:
+/// - support 2.5 spacings (about 20 neighbours);
+/// - speed of sound 30 m/s, about six times the fastest flow of its dam break (4.6 m/s): what
+///   WCSPH steps at if you pick it in the panel (the accurate `20 √(g H)` = 46 m/s costs it 1.5
+///   times the sub-steps); DFSPH only scales its artificial viscosity with it;
 /// - at most 40 sub-steps per tick, so a slow machine runs the fluid in slow motion instead of
 ///   dropping frames (the panel shows the speed relative to real time).
 pub fn demo_params() -> SphParams {

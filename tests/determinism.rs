@@ -5,16 +5,32 @@ mod common;
 
 use bevy::prelude::*;
 use bevy_sph2d::fluid::slices::SliceFluid;
-use bevy_sph2d::fluid::{FluidBlock, Obstacle, SphParams, Tank};
+use bevy_sph2d::fluid::{FluidBlock, Obstacle, PressureSolver, SphParams, Tank};
 use common::*;
 use std::process::Command;
 
 fn params() -> SphParams {
+    params_for(PressureSolver::Wcsph)
+}
+
+fn params_for(solver: PressureSolver) -> SphParams {
+    let base = match solver {
+        PressureSolver::Wcsph => SphParams::water_wcsph(),
+        PressureSolver::Dfsph => SphParams::water(),
+    };
     SphParams {
         particle_spacing: 0.01,
         tank: Some(Tank::new(0.6, 0.4)),
         speed_of_sound: SphParams::speed_of_sound_for_height(0.25),
-        ..default()
+        ..base
+    }
+}
+
+/// The solver a helper process runs (`SPH_TEST_SOLVER`, WCSPH when unset).
+fn solver_from_env() -> PressureSolver {
+    match std::env::var("SPH_TEST_SOLVER").as_deref() {
+        Ok("dfsph") => PressureSolver::Dfsph,
+        _ => PressureSolver::Wcsph,
     }
 }
 
@@ -55,11 +71,16 @@ fn run_ecs(seed: u64, app: &mut App) -> u64 {
 
 #[test]
 fn same_seed_same_run() {
-    let a = run_ecs(1, &mut create_app(params()));
-    let b = run_ecs(1, &mut create_app(params()));
-    let c = run_ecs(2, &mut create_app(params()));
-    assert_eq!(a, b, "two runs with the same seed differ");
-    assert_ne!(a, c, "a different seed should give a different run");
+    for solver in PressureSolver::ALL {
+        let a = run_ecs(1, &mut create_app(params_for(solver)));
+        let b = run_ecs(1, &mut create_app(params_for(solver)));
+        let c = run_ecs(2, &mut create_app(params_for(solver)));
+        assert_eq!(a, b, "{solver:?}: two runs with the same seed differ");
+        assert_ne!(
+            a, c,
+            "{solver:?}: a different seed should give a different run"
+        );
+    }
 }
 
 /// Run by [`ecs_is_deterministic_across_thread_counts`] in a child process (Bevy's compute pool
@@ -74,7 +95,7 @@ fn fingerprint_with_threads_from_env() {
     let mut app = App::new();
     app.add_plugins((
         MinimalPlugins.set(bevy_sph2d::task_pool_plugin(threads)),
-        bevy_sph2d::fluid::SphPlugin::default().with_params(params()),
+        bevy_sph2d::fluid::SphPlugin::default().with_params(params_for(solver_from_env())),
     ))
     .insert_resource(Time::<Fixed>::from_duration(
         std::time::Duration::from_secs_f64(TICK),
@@ -86,6 +107,15 @@ fn fingerprint_with_threads_from_env() {
 
 #[test]
 fn ecs_is_deterministic_across_thread_counts() {
+    ecs_across_thread_counts(PressureSolver::Wcsph, "wcsph");
+}
+
+#[test]
+fn ecs_is_deterministic_across_thread_counts_dfsph() {
+    ecs_across_thread_counts(PressureSolver::Dfsph, "dfsph");
+}
+
+fn ecs_across_thread_counts(solver: PressureSolver, name: &str) {
     let exe = std::env::current_exe().expect("test binary");
     let fingerprints: Vec<(String, String)> = [1, 2, 4]
         .iter()
@@ -98,6 +128,7 @@ fn ecs_is_deterministic_across_thread_counts() {
                     "--nocapture",
                 ])
                 .env("SPH_TEST_THREADS", threads.to_string())
+                .env("SPH_TEST_SOLVER", name)
                 .output()
                 .expect("run the helper");
             let stdout = String::from_utf8_lossy(&out.stdout);
@@ -118,7 +149,7 @@ fn ecs_is_deterministic_across_thread_counts() {
         "results depend on the thread count: {fingerprints:?}"
     );
     // And they equal the in-process run, whatever its pool.
-    let here = run_ecs(1, &mut create_app(params()));
+    let here = run_ecs(1, &mut create_app(params_for(solver)));
     assert_eq!(fingerprints[0].0, format!("fingerprint={here}"));
 }
 
@@ -159,9 +190,7 @@ fn dfsph_slices_are_deterministic_across_thread_counts() {
     // Fine enough for the solver's passes to run in parallel chunks.
     let p = SphParams {
         particle_spacing: 0.0022,
-        solver: dfsph_water().solver,
-        support_ratio: dfsph_water().support_ratio,
-        ..params()
+        ..params_for(PressureSolver::Dfsph)
     };
     let positions = block(1).positions_for(&p);
     assert!(positions.len() > bevy_sph2d::fluid::dfsph::PARALLEL_SLOTS);

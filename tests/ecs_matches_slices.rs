@@ -67,12 +67,12 @@ fn check(kernel: KernelKind, base: SphParams) {
 
 #[test]
 fn ecs_matches_slices_wendland() {
-    check(KernelKind::WendlandC2, SphParams::water());
+    check(KernelKind::WendlandC2, SphParams::water_wcsph());
 }
 
 #[test]
 fn ecs_matches_slices_muller() {
-    check(KernelKind::Muller, SphParams::water());
+    check(KernelKind::Muller, SphParams::water_wcsph());
 }
 
 #[test]
@@ -86,9 +86,7 @@ fn ecs_matches_slices_dfsph_cubic() {
 }
 
 fn dfsph() -> SphParams {
-    SphParams {
-        solver: PressureSolver::Dfsph,
-        support_ratio: 2.5,
-        ..SphParams::water()
-    }
+    let params = SphParams::water();
+    assert_eq!(params.solver, PressureSolver::Dfsph);
+    params
 }

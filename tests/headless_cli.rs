@@ -138,6 +138,8 @@ fn tank_scenario_writes_hydrostatic_pressure() {
             "0",
             "--jitter",
             "0",
+            "--solver",
+            "wcsph",
         ],
     );
     assert_eq!(rows.len(), 20 * 10);

@@ -29,13 +29,22 @@ fn stir(stirring: Res<Stirring>, mut particles: Query<(&Position, &mut Accelerat
 
 #[test]
 fn random_spawns_despawns_and_forces_stay_finite_and_inside() {
+    soak(SphParams::water());
+}
+
+#[test]
+fn random_spawns_despawns_and_forces_stay_finite_and_inside_wcsph() {
+    soak(SphParams::water_wcsph());
+}
+
+fn soak(base: SphParams) {
     let tank = Tank::new(0.8, 0.5);
     let params = SphParams {
         particle_spacing: 0.015,
         tank: Some(tank),
         speed_of_sound: 20.0,
         max_substeps: 200,
-        ..default()
+        ..base
     };
     let mut app = create_app(params);
     app.insert_resource(Stirring {

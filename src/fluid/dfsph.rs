@@ -2,42 +2,37 @@
 //! Koschier, "Divergence-free smoothed particle hydrodynamics", SCA 2015; TVCG 2017), over the
 //! [`layout`](super::layout). Pure, no ECS.
 //!
-//! **Experimental, not the default.** Measured: the Martin & Moyce dam-break front within 6–15%
-//! of the experiment (as WCSPH), momentum conserved to rounding, a steady hydrostatic pressure
-//! profile in a resting layer; not yet met: a still free surface (surface particles keep moving at
-//! about 0.07 m/s) and the dam break's impact on a wall (about 1.4 s in, the sloshing throws
-//! particles at 30 m/s).
-//! Select it with [`PressureSolver::Dfsph`](crate::fluid::PressureSolver::Dfsph) to try it.
-//!
 //! One sub-step, in the order both drivers ([`systems`](super::systems) and
 //! [`slices`](super::slices)) call it:
 //! 1. [`Dfsph::prepare`]: from the sorted snapshot, each particle's fluid neighbours with their
-//!    volume-weighted kernel gradients `gᵢⱼ = s V ∇Wᵢⱼ` and Laplacian weights (cached: every
-//!    solver iteration reuses them), the summed wall gradient, and the density `ρ̂ᵢ = ρᵢ/ρ₀` by
-//!    summation over fluid and wall particles.
+//!    volume-weighted kernel gradients `gᵢⱼ = s V ∇Wᵢⱼ` (cached: every solver iteration reuses
+//!    them), the summed wall gradient, the density `ρ̂ᵢ = ρᵢ/ρ₀` by summation over fluid and
+//!    wall particles, and the DFSPH factor `αᵢ = 1/(|Σⱼ gᵢⱼ + g_wall,ᵢ|² + Σⱼ |gᵢⱼ|²)`.
 //! 2. [`Dfsph::solve_divergence`]: the stiffness `κᵛ` that cancels the density change rate
-//!    `Dρ̂ᵢ/Dt = Σⱼ gᵢⱼ·(vᵢ − vⱼ) + 2 g_wall,ᵢ·vᵢ` of the current velocities.
+//!    `Dρ̂ᵢ/Dt = Σⱼ gᵢⱼ·(vᵢ − vⱼ) + 2 g_wall,ᵢ·vᵢ` of the current velocities (walls mirror the
+//!    particle's velocity; particles with a deficient neighbourhood,
+//!    [`DEFICIENT_NEIGHBORHOOD`], are left alone).
 //! 3. The caller adds non-pressure accelerations ([`Dfsph::non_pressure_acceleration`]: gravity,
 //!    viscosity, the walls' hydrostatic head) and its own external forces, picks the step
 //!    ([`Dfsph::stable_time_step`]: the flow's CFL `C Δx / v_max`, the force and viscous limits),
 //!    and stores the accelerations with [`Dfsph::set_acceleration`].
 //! 4. [`Dfsph::solve_density`]: predicts `v* = v + dt a`, then the stiffness `κ` that brings the
-//!    predicted density `ρ̂ᵢ + dt Dρ̂ᵢ/Dt` back to one.
+//!    predicted density `ρ̂ᵢ + dt Dρ̂ᵢ/Dt` back to one wherever it is compressed.
 //! 5. The caller moves each particle with its solved velocity ([`Dfsph::velocity`]).
 //!
 //! Both solves change velocities by the symmetric pressure force
-//! `Δvᵢ = −dt (Σⱼ (κᵢ + κⱼ) gᵢⱼ + 2κᵢ g_wall,ᵢ)` (momentum is conserved pair by pair; walls
-//! mirror the fluid's pressure and velocity, Akinci et al. 2012, with the hydrostatic head of
-//! Adami et al. 2012). Unlike Bender & Koschier, who iterate Jacobi on the operator this force
-//! implies, the pressure equations are solved by conjugate gradients on the compact SPH Laplacian
-//! (Brookshaw 1985; Morris et al. 1997) `Σⱼ wᵢⱼ (κᵢ − κⱼ)`, as incompressible SPH does (Cummins &
-//! Rudman 1999; Shao & Lo 2003): measured here, plain Jacobi on the DFSPH operator diverges in 2D,
-//! relaxed Jacobi needed 30–80 iterations per sub-step and left the pressure ringing, while the
-//! Laplacian solve converges in 10–20 and gives a steady hydrostatic profile. Free-surface
-//! particles (summed density under [`SURFACE_DENSITY`]) and the air missing from the
-//! neighbourhoods of particles away from walls are held at zero pressure, walls are mirrored, and
-//! no particle is pulled (negative stiffness is cut to zero). The stiffness is a
-//! pressure per rest density (`p = ρ₀ κ`, m²/s²), so it warm-starts the next sub-step.
+//! `Δvᵢ = −dt (Σⱼ (κᵢ + κⱼ) gᵢⱼ + 2κᵢ g_wall,ᵢ)`: momentum is conserved pair by pair, and a wall
+//! particle mirrors the pressure of the fluid particle it pushes (Akinci et al. 2012, who count
+//! it once: mirrored, the pressure at a wall is the hydrostatic one, not twice it). Mirroring
+//! both the pressure and the velocity keeps the pressure equations symmetric (the push is the
+//! transpose of the density rate); mirroring the pressure alone made the wall rows of a resting
+//! layer bounce at 0.4 m/s under a 0.1% tolerance. They are
+//! Bender & Koschier's Jacobi iterations with the exact diagonal `1/(dt² αᵢ)`, projected so that
+//! no stiffness goes below zero (pressure pushes, never pulls: a particle that is not compressed
+//! relaxes to zero pressure instead of holding the last sub-step's), and stop at a mean error
+//! under the settings' tolerances. The stiffness is a pressure per rest density (`p = ρ₀ κ`,
+//! m²/s²), independent of the step, so it warm-starts the next sub-step (the divergence solve
+//! from half of it, as Bender & Koschier do).
 //!
 //! Wall particles lie on the fluid's rest lattice and count with the fluid's particle volume in
 //! the density sum, so a particle at a wall has rest density at rest. Kernel gradients carry the
@@ -56,23 +51,27 @@ use super::solver::{SphConstants, with_kernels};
 use bevy::math::{Vec2, Vec4};
 
 /// Slots per parallel task, fixed (not from the thread count) so that sums over slots add up in
-/// the same order on any number of threads. A fluid of up to this many particles runs each pass
-/// on the calling thread: at 2,500 particles a pass is tens of microseconds, about the cost of
-/// waking a second thread.
-pub const CHUNK: usize = 2048;
+/// the same order on any number of threads.
+pub const CHUNK: usize = 512;
 
 /// Fewest particles whose passes run in parallel (measured with the `bench` example: at 2,500
-/// particles the ECS path, on Bevy's task pool, ran 3.6 times slower than on one thread).
+/// particles, run in parallel from 1,024 on, the demo's dam break ran no faster on two threads
+/// than on one; a pass there is tens of microseconds, about the cost of waking a thread).
 pub const PARALLEL_SLOTS: usize = 8192;
 
-/// Walls mirror the fluid next to them: its pressure (Akinci et al. 2012, with the hydrostatic
-/// head of Adami et al. 2012) and its velocity towards them, so a wall particle counts twice its
-/// one-sided share.
+/// A particle with fewer neighbours (fluid and wall) than this fraction of a full rest
+/// neighbourhood is deficient: the divergence solve leaves it alone (Bender & Koschier's
+/// "particle deficiency", which keeps splashes and the free surface from being pinned).
+pub const DEFICIENT_NEIGHBORHOOD: f32 = 0.6;
+
+/// Walls mirror the pressure of the fluid particle they push (Akinci et al. 2012 take it once;
+/// mirrored, a particle at a wall holds the hydrostatic pressure of its depth instead of twice
+/// it, which matters where wall pressure is read).
 const WALL_MIRROR: f32 = 2.0;
 
-/// Particles with less than this fraction of rest density from summation are at the free
-/// surface: they are held at zero pressure.
-pub const SURFACE_DENSITY: f32 = 0.97;
+/// The Jacobi updates are relaxed to this fraction of the largest stable relaxation
+/// `2/λ_max` (see [`lattice_spectral_radius`]).
+const RELAXATION: f32 = 0.75;
 
 /// One cached fluid neighbour of a particle.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -81,8 +80,6 @@ struct Neighbor {
     slot: u32,
     /// `s V ∇Wᵢⱼ`, 1/m.
     gradient: Vec2,
-    /// `−2 (rᵢⱼ·gᵢⱼ)/(r² + η²)`, 1/m²: the pair's weight in the SPH Laplacian.
-    weight: f32,
 }
 
 /// Per-particle values of the current sub-step, by sorted slot.
@@ -90,11 +87,13 @@ struct Neighbor {
 struct SlotState {
     /// Cached fluid neighbours.
     count: u32,
-    /// `ρ/ρ₀`.
+    /// `ρ/ρ₀` by summation over fluid and wall particles.
     density: f32,
-    /// `1/Σⱼ wᵢⱼ`, the inverse diagonal of the Laplacian, m² (zero for a particle without
-    /// neighbours): the preconditioner of the pressure solves.
+    /// The DFSPH factor `1/(|Σⱼ gᵢⱼ + g_wall|² + Σⱼ |gᵢⱼ|²)`, m² (zero without neighbours): the
+    /// inverse of the diagonal of the pressure equations, per `dt²`.
     factor: f32,
+    /// Whether the neighbourhood is deficient (see [`DEFICIENT_NEIGHBORHOOD`]).
+    deficient: bool,
     /// `Σ_b s V ∇W_ib` over wall particles, 1/m.
     wall_gradient: Vec2,
     /// `Σ_b V (r·∇W)/(r² + η²)` over wall particles (dimensionless, negative), for wall friction.
@@ -102,29 +101,13 @@ struct SlotState {
     /// `−Σ_b (g·(x_b − xᵢ)) s V ∇W_ib`, m/s²: the hydrostatic head of the walls' mirrored
     /// pressure (Adami et al. 2012), which a pressed particle feels on top of its own.
     wall_head: Vec2,
-    /// Laplacian weight of the neighbours a particle away from walls lacks (air), held at zero
-    /// pressure, 1/m²: the free surface as a boundary condition even where no surface particle
-    /// marks it. Without it a detached sheet of fluid is a pure Neumann problem, whose solve
-    /// diverged (measured: stiffness of 10⁶ m²/s² after 100 iterations in the demo's dam break).
-    air: f32,
 }
 
-impl SlotState {
-    /// Whether the particle takes part in the pressure solves (is not at the free surface).
-    #[inline]
-    fn active(&self) -> bool {
-        self.factor > 0.0 && self.density >= SURFACE_DENSITY
-    }
-}
-
-/// Scratch of the conjugate-gradient solves, by sorted slot.
+/// Scratch of the solves, by sorted slot.
 #[derive(Debug, Clone, Default)]
 struct Scratch {
-    b: Vec<f32>,
-    best: Vec<f32>,
-    r: Vec<f32>,
-    p: Vec<f32>,
-    q: Vec<f32>,
+    /// The stiffness change each particle asks for in the current iteration, m²/s².
+    delta: Vec<f32>,
 }
 
 /// What the last sub-step's solves did.
@@ -134,7 +117,7 @@ pub struct DfsphReport {
     pub density_iterations: u32,
     /// Jacobi iterations of the divergence solve.
     pub divergence_iterations: u32,
-    /// Mean predicted compression left after the density solve, fraction.
+    /// Mean predicted density error left after the density solve, fraction.
     pub density_error: f32,
     /// Mean density change per step left after the divergence solve, fraction.
     pub divergence_error: f32,
@@ -150,7 +133,9 @@ pub struct Dfsph {
     acceleration: SlotVectors,
     kappa: Vec<f32>,
     kappa_divergence: Vec<f32>,
-    cg: Scratch,
+    scratch: Scratch,
+    /// The Jacobi relaxation `ω` and the kernel and support ratio it was computed for.
+    relaxation: (f32, Option<(super::kernels::KernelKind, u32)>),
     /// What the last sub-step did.
     pub report: DfsphReport,
 }
@@ -166,9 +151,9 @@ impl Dfsph {
         self.state.is_empty()
     }
 
-    /// Step 1: caches neighbours and gradients, sums densities, computes the preconditioner, and takes
-    /// the velocities from the snapshot. `warm_start(slot)` gives each particle's stiffness
-    /// `[κ, κᵛ]` from the last sub-step (m²/s²).
+    /// Step 1: caches neighbours and gradients, sums densities, computes the DFSPH factors, and
+    /// takes the velocities from the snapshot. `warm_start(slot)` gives each particle's
+    /// stiffness `[κ, κᵛ]` from the last sub-step (m²/s²).
     pub fn prepare(
         &mut self,
         c: &SphConstants,
@@ -189,7 +174,7 @@ impl Dfsph {
         self.acceleration.reset(n);
         self.kappa.resize(n, 0.0);
         self.kappa_divergence.resize(n, 0.0);
-        self.cg.b.resize(n, 0.0);
+        self.scratch.delta.resize(n, 0.0);
         let warm = c.dfsph.warm_start;
         for slot in 0..n {
             let k = if warm { warm_start(slot) } else { Vec2::ZERO };
@@ -202,8 +187,10 @@ impl Dfsph {
             .next_multiple_of(4)
             .max(self.stride);
         loop {
-            self.rows.clear();
-            self.rows.resize(n * stride, Neighbor::default());
+            // Rows are written before they are read (up to each particle's count).
+            if self.rows.len() != n * stride {
+                self.rows.resize(n * stride, Neighbor::default());
+            }
             let overflow = with_kernels!(c.kernel, c.support, |w, g| {
                 self.gather_neighbors(&w, &g, c, fluid, walls, stride, parallel)
             });
@@ -214,6 +201,11 @@ impl Dfsph {
         }
         self.stride = stride;
         self.report = DfsphReport::default();
+        let key = Some((c.kernel, (c.support / c.spacing).to_bits()));
+        if self.relaxation.1 != key {
+            let radius = with_kernels!(c.kernel, c.support, |_w, g| lattice_spectral_radius(&g, c));
+            self.relaxation = (RELAXATION * 2.0 / radius.max(1.0), key);
+        }
     }
 
     #[expect(clippy::too_many_arguments, reason = "one pass, spelled out")]
@@ -228,18 +220,17 @@ impl Dfsph {
         parallel: &impl Parallel,
     ) -> bool {
         let n = self.state.len();
-        let chunk = CHUNK;
         let scaled_volume = c.gradient_scale * c.volume;
-        let full_weight = lattice_weight(g, c);
+        let deficient_below = DEFICIENT_NEIGHBORHOOD * lattice_neighbors(c) as f32;
         let support_sq = Vec4::splat(c.support_sq);
         let tiny = Vec4::splat(1e-12 * c.support_sq);
         let eta_sq = 0.01 * c.smoothing_length * c.smoothing_length;
         let mut jobs: Vec<_> = self
             .state
-            .chunks_mut(chunk)
-            .zip(self.rows.chunks_mut(chunk * stride))
+            .chunks_mut(CHUNK)
+            .zip(self.rows.chunks_mut(CHUNK * stride))
             .enumerate()
-            .map(|(k, (state, rows))| (k * chunk, state, rows, false))
+            .map(|(k, (state, rows))| (k * CHUNK, state, rows, false))
             .collect();
         run_jobs(parallel, n, &mut jobs, |(start, states, rows, overflow)| {
             for (k, state) in states.iter_mut().enumerate() {
@@ -247,38 +238,39 @@ impl Dfsph {
                 let row = &mut rows[k * stride..(k + 1) * stride];
                 let mut len = 0usize;
                 let mut density = Vec4::ZERO;
-                let mut diagonal = 0.0f32;
+                let (mut sum_x, mut sum_y, mut sum_sq) = (Vec4::ZERO, Vec4::ZERO, Vec4::ZERO);
                 fluid.points.for_each_batch(x, |first, dx, dy, r2| {
                     density += w.value_sq_x4(r2);
                     let inside = r2.cmplt(support_sq) & r2.cmpgt(tiny);
-                    let mask = inside.bitmask();
+                    let mut mask = inside.bitmask();
                     if mask == 0 {
                         return;
                     }
-                    let r2 = r2.min(support_sq);
-                    let slope = g.derivative_over_r_x4(r2.sqrt());
-                    // ∇ᵢWᵢⱼ = slope (xᵢ − xⱼ) = −slope (dx, dy).
-                    let gx = (-scaled_volume * slope * dx).to_array();
-                    let gy = (-scaled_volume * slope * dy).to_array();
-                    let weights =
-                        (-2.0 * scaled_volume * slope * r2 / (r2 + Vec4::splat(eta_sq))).to_array();
-                    for lane in 0..4 {
-                        if mask & (1 << lane) == 0 {
-                            continue;
-                        }
-                        diagonal += weights[lane];
+                    let slope = g.derivative_over_r_x4(r2.min(support_sq).sqrt());
+                    // ∇ᵢWᵢⱼ = slope (xᵢ − xⱼ) = −slope (dx, dy); zero on lanes outside.
+                    let scale = Vec4::select(inside, -scaled_volume * slope, Vec4::ZERO);
+                    let (gx, gy) = (scale * dx, scale * dy);
+                    sum_x += gx;
+                    sum_y += gy;
+                    sum_sq += gx * gx + gy * gy;
+                    let (gx, gy) = (gx.to_array(), gy.to_array());
+                    while mask != 0 {
+                        let lane = mask.trailing_zeros() as usize;
+                        mask &= mask - 1;
                         if len < stride {
                             row[len] = Neighbor {
                                 slot: (first + lane) as u32,
                                 gradient: Vec2::new(gx[lane], gy[lane]),
-                                weight: weights[lane],
                             };
                         }
                         len += 1;
                     }
                 });
+                let sum = Vec2::new(sum_x.element_sum(), sum_y.element_sum());
+                let sum_sq = sum_sq.element_sum();
                 let mut wall_gradient = Vec2::ZERO;
                 let mut wall_viscosity = 0.0f32;
+                let mut wall_count = 0u32;
                 let mut wall_head = Vec2::ZERO;
                 walls.points.for_each_batch(x, |_, dx, dy, r2| {
                     density += w.value_sq_x4(r2);
@@ -300,33 +292,28 @@ impl Dfsph {
                             wall_gradient += gradient;
                             wall_viscosity += friction[lane];
                             wall_head -= head[lane] * gradient;
+                            wall_count += 1;
                         }
                     }
                 });
                 if len > stride {
                     *overflow = true;
                 }
-                // What a particle away from walls lacks of a full lattice is air. Next to walls
-                // none is counted: measured, counting it there (walls as fluid) made the demo's
-                // dam break blow up within 0.1 s, for a reason not found yet.
-                let near_wall = wall_viscosity < 0.0;
-                let air = if near_wall {
-                    0.0
-                } else {
-                    (full_weight - diagonal).max(0.0)
-                };
+                // A particle's own stiffness changes its density rate through its own velocity
+                // (pushed by its neighbours and the mirrored wall) and its neighbours'.
+                let diagonal = (sum + WALL_MIRROR * wall_gradient).length_squared() + sum_sq;
                 *state = SlotState {
                     count: len.min(stride) as u32,
                     density: c.volume * density.element_sum(),
-                    factor: if diagonal > 1e-3 / c.support_sq {
-                        1.0 / (diagonal + air)
+                    factor: if diagonal > 1e-6 / c.support_sq {
+                        1.0 / diagonal
                     } else {
                         0.0
                     },
+                    deficient: ((len as u32 + wall_count) as f32) < deficient_below,
                     wall_gradient,
                     wall_viscosity,
                     wall_head,
-                    air,
                 };
             }
         });
@@ -340,19 +327,17 @@ impl Dfsph {
         if self.is_empty() || dt <= 0.0 || settings.max_divergence_iterations == 0 {
             return 0;
         }
-        // `dt D P κᵛ = Dv`: the pressure that cancels the density change rate.
-        self.fill_source(|rate, _| rate / dt, parallel);
-        let warm = settings.warm_start;
-        let (iterations, error) = self.conjugate_gradient(
+        // The density change over one step of the current velocities, where the neighbourhood
+        // is full enough to carry pressure.
+        let (iterations, error) = self.solve(
             dt,
             Target::Divergence,
-            warm,
+            |rate, s| if s.deficient { None } else { Some(dt * rate) },
             settings.divergence_tolerance,
             1,
             settings.max_divergence_iterations,
             parallel,
         );
-        self.apply_pressure(dt, Target::Divergence, parallel);
         self.report.divergence_iterations = iterations;
         self.report.divergence_error = error;
         iterations
@@ -368,202 +353,126 @@ impl Dfsph {
         for (slot, v) in self.velocity.iter_mut().enumerate() {
             *v += dt * self.acceleration.get(slot);
         }
-        // `dt² D P κ = ρ̂ + dt Dv* − 1`: the pressure that removes the predicted compression.
-        self.fill_source(
-            |rate, density| (density + dt * rate - 1.0) / (dt * dt),
-            parallel,
-        );
-        let (iterations, error) = self.conjugate_gradient(
+        // The predicted density after the step, minus one.
+        let (iterations, error) = self.solve(
             dt,
             Target::Density,
-            settings.warm_start,
+            |rate, s| Some(s.density + dt * rate - 1.0),
             settings.density_tolerance,
-            1,
+            2,
             settings.max_density_iterations,
             parallel,
         );
-        self.apply_pressure(dt, Target::Density, parallel);
         self.report.density_iterations = iterations;
         self.report.density_error = error;
         iterations
     }
 
-    /// Sets the right-hand side `b` of the active particles from their density change rate
-    /// `Dρ̂/Dt` (with the current velocities) and density: `source(rate, ρ̂)`; zero elsewhere.
-    fn fill_source(&mut self, source: impl Fn(f32, f32) -> f32 + Sync, parallel: &impl Parallel) {
-        let (rows, state, velocity) = (&self.rows, &self.state, &self.velocity);
-        let stride = self.stride;
-        for_each_slot(&mut self.cg.b, parallel, |slot, b| {
-            let s = state[slot];
-            if !s.active() {
-                *b = 0.0;
-                return 0.0;
-            }
-            let vi = velocity[slot];
-            let row = &rows[slot * stride..slot * stride + s.count as usize];
-            // Walls mirror the particle's velocity towards them.
-            let mut rate = WALL_MIRROR * s.wall_gradient.dot(vi);
-            for neighbor in row {
-                rate += neighbor.gradient.dot(vi - velocity[neighbor.slot as usize]);
-            }
-            *b = source(rate, s.density);
-            0.0
-        });
-    }
-
-    /// Solves `−∇²κ = b` (the SPH Laplacian, [`multiply`](Self::multiply)) over the active
-    /// particles by conjugate gradients with the Laplacian's diagonal as (Jacobi)
-    /// preconditioner, starting from the target's stiffness (warm) or zero, until the mean
-    /// remaining density change `dt² |r|` is under `tolerance`. Returns the iterations and that
-    /// error.
+    /// Projected Jacobi on the DFSPH pressure equations of `target`: each iteration every
+    /// particle asks for the stiffness change `Δκᵢ = eᵢ/(dt² αᵢ)` that would cancel its error
+    /// `eᵢ = error(Dρ̂ᵢ/Dt, state)` (the predicted density excess, or the density change of
+    /// one step) on its own, kept so that `κᵢ ≥ 0` (pressure pushes, never pulls), and the
+    /// velocities take the pressure accelerations of the changes. Starts from the target's
+    /// stiffness of the last sub-step (warm start) or zero, and stops once at least
+    /// `min_iterations` are done and the mean error of the particles that can still change
+    /// is under `tolerance`. Returns the iterations and that mean error.
     #[expect(
         clippy::too_many_arguments,
         reason = "the solve's settings, spelled out"
     )]
-    fn conjugate_gradient(
+    fn solve(
         &mut self,
         dt: f32,
         target: Target,
-        warm: bool,
+        error: impl Fn(f32, &SlotState) -> Option<f32> + Sync,
         tolerance: f32,
         min_iterations: u32,
         max_iterations: u32,
         parallel: &impl Parallel,
     ) -> (u32, f32) {
         let n = self.state.len();
-        let scale = (dt * dt) as f64 / n as f64;
-        let mut x = core::mem::take(match target {
+        let warm = match target {
+            Target::Density => 1.0,
+            // Bender & Koschier start the divergence solve from half the last stiffness.
+            Target::Divergence => 0.5,
+        };
+        let mut kappa = core::mem::take(match target {
             Target::Density => &mut self.kappa,
             Target::Divergence => &mut self.kappa_divergence,
         });
-        for (k, s) in x.iter_mut().zip(&self.state) {
-            if !warm || !s.active() {
-                *k = 0.0;
-            }
+        let mut delta = core::mem::take(&mut self.scratch.delta);
+        // The warm start is the first change, from zero.
+        for ((d, k), s) in delta.iter_mut().zip(&mut kappa).zip(&self.state) {
+            *d = if s.factor > 0.0 { warm * *k } else { 0.0 };
+            *k = 0.0;
         }
-        // r = b − A x, z = r/α, p = z.
-        let mut q = core::mem::take(&mut self.cg.q);
-        self.multiply(&x, &mut q, parallel);
-        let (b, state) = (&self.cg.b, &self.state);
-        let mut r = core::mem::take(&mut self.cg.r);
-        r.resize(n, 0.0);
-        let mut rz = for_each_slot(&mut r, parallel, |slot, r| {
-            *r = b[slot] - q[slot];
-            (*r as f64) * ((*r * state[slot].factor) as f64)
-        });
-        let mut direction = core::mem::take(&mut self.cg.p);
-        direction.clear();
-        direction.extend(r.iter().zip(state).map(|(r, s)| r * s.factor));
-        let mut error = (r.iter().map(|r| r.abs() as f64).sum::<f64>() * scale) as f32;
-        // The best iterate so far: where the system is nearly singular (a sheet of fluid whose
-        // pressure nothing pins), the iterates can run off while the residual stalls.
-        let mut best = core::mem::take(&mut self.cg.best);
-        best.clear();
-        best.extend_from_slice(&x);
-        let mut best_error = error;
-        let mut iterations = 0;
-        while (error > tolerance || iterations < min_iterations) && iterations < max_iterations {
-            let pq = self.multiply(&direction, &mut q, parallel);
-            if pq <= 0.0 || !pq.is_finite() {
-                break;
-            }
-            let step = (rz / pq) as f32;
-            let state = &self.state;
-            let mut jobs: Vec<_> = x
-                .chunks_mut(CHUNK)
-                .zip(r.chunks_mut(CHUNK))
-                .enumerate()
-                .map(|(k, (x, r))| (k * CHUNK, x, r, 0.0f64, 0.0f64))
-                .collect();
-            let (p_ref, q_ref) = (&direction, &q);
-            run_jobs(parallel, n, &mut jobs, |(start, xs, rs, rz, abs)| {
-                for (k, (x, r)) in xs.iter_mut().zip(rs.iter_mut()).enumerate() {
-                    let slot = *start + k;
-                    *x += step * p_ref[slot];
-                    *r -= step * q_ref[slot];
-                    *rz += (*r as f64) * ((*r * state[slot].factor) as f64);
-                    *abs += r.abs() as f64;
+        let inv_dt_sq = 1.0 / (dt * dt);
+        let relaxation = self.relaxation.0;
+        let mut iterations = 0u32;
+        let mut mean_error;
+        loop {
+            self.push(dt, &delta, &mut kappa, parallel);
+            let (rows, state, velocity) = (&self.rows, &self.state, &self.velocity);
+            let stride = self.stride;
+            let kappa_ref = &kappa;
+            let sum = for_each_slot(&mut delta, parallel, |slot, d| {
+                let s = state[slot];
+                *d = 0.0;
+                if s.factor == 0.0 {
+                    return 0.0;
                 }
+                let vi = velocity[slot];
+                let row = &rows[slot * stride..slot * stride + s.count as usize];
+                let mut rate = WALL_MIRROR * s.wall_gradient.dot(vi);
+                for neighbor in row {
+                    rate += neighbor.gradient.dot(vi - velocity[neighbor.slot as usize]);
+                }
+                let k = kappa_ref[slot];
+                let Some(e) = error(rate, &s) else {
+                    // Left alone: its stiffness returns to zero.
+                    *d = -k;
+                    return 0.0;
+                };
+                // Projected: what is left once the stiffness cannot go below zero.
+                let change = (relaxation * e * s.factor * inv_dt_sq).max(-k);
+                *d = change;
+                (change / (relaxation * s.factor * inv_dt_sq)).abs() as f64
             });
-            let rz_new: f64 = jobs.iter().map(|j| j.3).sum();
-            error = (jobs.iter().map(|j| j.4).sum::<f64>() * scale) as f32;
-            drop(jobs);
-            let beta = if rz > 0.0 { (rz_new / rz) as f32 } else { 0.0 };
-            rz = rz_new;
-            for ((p, r), s) in direction.iter_mut().zip(&r).zip(&self.state) {
-                *p = r * s.factor + beta * *p;
+            mean_error = (sum / n as f64) as f32;
+            if (mean_error <= tolerance && iterations >= min_iterations)
+                || iterations >= max_iterations
+                || !mean_error.is_finite()
+            {
+                break;
             }
             iterations += 1;
-            if error < best_error {
-                best.copy_from_slice(&x);
-                best_error = error;
-            } else if error.is_nan() || error >= 4.0 * best_error {
-                // Running off: stop and keep the best.
-                break;
-            }
-        }
-        if error.is_nan() || error > best_error {
-            core::mem::swap(&mut x, &mut best);
-            error = best_error;
-        }
-        self.cg.best = best;
-        // No tension: a particle the solve would pull is left at zero pressure.
-        for k in &mut x {
-            *k = k.max(0.0);
         }
         match target {
-            Target::Density => self.kappa = x,
-            Target::Divergence => self.kappa_divergence = x,
+            Target::Density => self.kappa = kappa,
+            Target::Divergence => self.kappa_divergence = kappa,
         }
-        self.cg.q = q;
-        self.cg.r = r;
-        self.cg.p = direction;
-        (iterations, error)
+        self.scratch.delta = delta;
+        (iterations, mean_error)
     }
 
-    /// `out = −∇²x` on the active particles by the SPH Laplacian (Brookshaw 1985; Morris et al.
-    /// 1997), `Σⱼ wᵢⱼ (xᵢ − xⱼ)`, with `x` held at zero at the free surface and mirrored at walls
-    /// (no wall term); `out = x` on the others.
-    /// Returns `x·out` (f64, chunk by chunk).
-    fn multiply(&mut self, x: &[f32], out: &mut Vec<f32>, parallel: &impl Parallel) -> f64 {
-        let n = self.state.len();
+    /// Adds the stiffness changes `delta` to `kappa` and their pressure accelerations over `dt`
+    /// to the velocities.
+    fn push(&mut self, dt: f32, delta: &[f32], kappa: &mut [f32], parallel: &impl Parallel) {
         let (rows, state) = (&self.rows, &self.state);
         let stride = self.stride;
-        out.resize(n, 0.0);
-        for_each_slot(out, parallel, |slot, out| {
-            let s = state[slot];
-            let own = x[slot];
-            if !s.active() {
-                *out = own;
-                return (own as f64) * (own as f64);
-            }
-            let row = &rows[slot * stride..slot * stride + s.count as usize];
-            let mut sum = s.air * own;
-            for neighbor in row {
-                sum += neighbor.weight * (own - x[neighbor.slot as usize]);
-            }
-            *out = sum;
-            (own as f64) * (sum as f64)
-        })
-    }
-
-    /// Changes the velocities by the target stiffness' pressure accelerations over `dt`.
-    fn apply_pressure(&mut self, dt: f32, target: Target, parallel: &impl Parallel) {
-        let (rows, state) = (&self.rows, &self.state);
-        let stride = self.stride;
-        let kappa = match target {
-            Target::Density => &self.kappa,
-            Target::Divergence => &self.kappa_divergence,
-        };
         for_each_slot(&mut self.velocity, parallel, |slot, v| {
-            *v -= dt * pressure_push(rows, stride, state[slot], slot, kappa);
+            *v -= dt * pressure_push(rows, stride, state[slot], slot, delta);
             0.0
         });
+        for (k, d) in kappa.iter_mut().zip(delta) {
+            *k += d;
+        }
     }
 
     /// Gravity plus laminar (Lo & Shao 2002) and artificial (Monaghan) viscosity at sorted
     /// `slot`, m/s², from the cached neighbours and the divergence-free velocities. Walls add
-    /// laminar friction only, as in [`wcsph`](super::wcsph).
+    /// laminar friction, as in [`wcsph`](super::wcsph), and the hydrostatic head of their
+    /// mirrored pressure.
     pub fn non_pressure_acceleration(
         &self,
         c: &SphConstants,
@@ -593,14 +502,12 @@ impl Dfsph {
                 + (artificial * approach * inv) * mass_gradient;
         }
         let wall = laminar * c.rest_density / (rho_i + c.rest_density) * s.wall_viscosity;
-        // The walls' hydrostatic head acts on particles pressed against them (pressure in the
-        // last sub-step), not on spray passing by.
-        // Walls mirror the particle's pressure (Akinci et al. 2012) with the hydrostatic head
-        // (Adami et al. 2012): the solves take the particle's own stiffness on the wall side
-        // (`κᵢ g_wall`, which keeps their operator symmetric); the mirrored half and the head
-        // follow here from the last sub-step's stiffness.
-        let kappa = self.kappa[slot];
-        let head = if kappa > 0.0 { s.wall_head } else { Vec2::ZERO };
+        // The walls mirror a particle's pressure with the hydrostatic head (Adami et al. 2012):
+        // the solves push with the particle's own stiffness (`2κᵢ g_wall`), the head follows
+        // here for particles within the fluid (a full neighbourhood), not for spray. (Switched
+        // by the last sub-step's pressure instead, it flickered on and off along the floor and
+        // set the bottom row bouncing.)
+        let head = if s.deficient { Vec2::ZERO } else { s.wall_head };
         a + wall * vi + head + c.gravity
     }
 
@@ -642,7 +549,9 @@ impl Dfsph {
         Vec2::new(self.kappa[slot], self.kappa_divergence[slot])
     }
 
-    /// Pressure at sorted `slot`, Pa: `ρ₀ (κ + κᵛ)`, both solves' pressures of this sub-step.
+    /// Pressure at sorted `slot`, Pa: `ρ₀ (κ + κᵛ)`, both solves' pressures of this sub-step
+    /// (the density solve's holds the fluid at rest density; the divergence solve's stops the
+    /// flow into walls and into compressed fluid, as at an impact).
     #[inline]
     pub fn pressure(&self, c: &SphConstants, slot: usize) -> f32 {
         c.rest_density * (self.kappa[slot] + self.kappa_divergence[slot])
@@ -667,33 +576,64 @@ pub fn stable_time_step(c: &SphConstants, max_speed: f32, max_acceleration: f32)
     dt
 }
 
-/// `Σⱼ wᵢⱼ` of an interior particle of the rest lattice: the Laplacian weight of a full
-/// neighbourhood, 1/m².
-fn lattice_weight<G: RadialKernel>(g: &G, c: &SphConstants) -> f32 {
+/// Neighbours (the particle itself not counted) of an interior particle of the rest lattice.
+fn lattice_neighbors(c: &SphConstants) -> u32 {
     let reach = (c.support / c.spacing).ceil() as i32;
-    let eta_sq = 0.01 * c.smoothing_length * c.smoothing_length;
-    let mut sum = 0.0f32;
+    let mut count = 0;
     for j in -reach..=reach {
         for i in -reach..=reach {
             let r2 = ((i * i + j * j) as f32) * c.spacing * c.spacing;
             if r2 > 0.0 && r2 < c.support_sq {
-                let slope = g.derivative_over_r(r2.sqrt());
-                sum += -2.0 * c.gradient_scale * c.volume * slope * r2 / (r2 + eta_sq);
+                count += 1;
             }
         }
     }
-    sum
+    count
 }
 
-/// Which stiffness a pressure application adds to.
+/// The largest eigenvalue `λ_max` of the DFSPH pressure operator scaled by its diagonal on the
+/// interior of the rest lattice: with a stiffness wave `κ = e^{ik·x}`, the operator is
+/// `|S(k)|²` with `S(k) = Σⱼ gⱼ sin(k·dⱼ)` over the neighbour offsets `dⱼ`, the diagonal `Σⱼ |gⱼ|²`.
+/// It is above 2 in 2D (about 2.5 for the Wendland kernel at 2.5 spacings, 3.3 at 3), so the
+/// plain Jacobi update of Bender & Koschier diverges here (measured) and is relaxed.
+fn lattice_spectral_radius<G: RadialKernel>(g: &G, c: &SphConstants) -> f32 {
+    let reach = (c.support / c.spacing).ceil() as i32;
+    let mut offsets = Vec::new();
+    for j in -reach..=reach {
+        for i in -reach..=reach {
+            let d = Vec2::new(i as f32, j as f32) * c.spacing;
+            let r2 = d.length_squared();
+            if r2 > 0.0 && r2 < c.support_sq {
+                offsets.push((d, g.derivative_over_r(r2.sqrt()) * d));
+            }
+        }
+    }
+    let diagonal: f32 = offsets.iter().map(|(_, g)| g.length_squared()).sum();
+    if diagonal <= 0.0 {
+        return 1.0;
+    }
+    const SAMPLES: usize = 48;
+    let mut largest = 0.0f32;
+    for a in 0..=SAMPLES {
+        for b in 0..=SAMPLES {
+            let k = Vec2::new(a as f32, b as f32)
+                * (core::f32::consts::PI / (SAMPLES as f32 * c.spacing));
+            let s: Vec2 = offsets.iter().map(|&(d, g)| k.dot(d).sin() * g).sum();
+            largest = largest.max(s.length_squared() / diagonal);
+        }
+    }
+    largest
+}
+
+/// Which stiffness a solve updates.
 #[derive(Clone, Copy)]
 enum Target {
     Density,
     Divergence,
 }
 
-/// `Σⱼ (xᵢ + xⱼ) gᵢⱼ + xᵢ g_wall,ᵢ`: the pressure acceleration of stiffness `x` on particle
-/// `slot`, per unit stiffness gradient (walls take the particle's own stiffness).
+/// `Σⱼ (xᵢ + xⱼ) gᵢⱼ + 2 xᵢ g_wall,ᵢ`: the pressure acceleration of stiffness `x` on particle
+/// `slot`, per unit stiffness (walls mirror the particle's own stiffness, [`WALL_MIRROR`]).
 #[inline]
 fn pressure_push(rows: &[Neighbor], stride: usize, s: SlotState, slot: usize, x: &[f32]) -> Vec2 {
     let own = x[slot];
@@ -847,7 +787,9 @@ mod tests {
     fn pressure_of_a_linear_stiffness_field_is_its_gradient() {
         let slope = 3.0;
         let (_, fluid, mut dfsph) = lattice(20, &params(), |x| Vec2::new(slope * x.y, 0.0));
-        dfsph.apply_pressure(1.0, Target::Density, &Sequential);
+        let delta = dfsph.kappa.clone();
+        let mut kappa = vec![0.0; delta.len()];
+        dfsph.push(1.0, &delta, &mut kappa, &Sequential);
         let centre = (0..fluid.len())
             .min_by(|&a, &b| {
                 let d = |s: usize| (fluid.points.get(s) - Vec2::splat(0.1)).length();

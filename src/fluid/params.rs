@@ -72,14 +72,14 @@ pub struct SphParams {
 #[derive(Reflect, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub enum PressureSolver {
     /// Weakly compressible SPH with the Tait equation of state: explicit, stepped at the acoustic
-    /// CFL limit (`C h / c₀`, a tenth of a millisecond at centimetre spacing). The default and
-    /// the reference.
-    #[default]
+    /// CFL limit (`C h / c₀`, a tenth of a millisecond at centimetre spacing). The reference, and
+    /// the solver for gases ([`SphParams::gas`]) and anything else that needs an equation of
+    /// state.
     Wcsph,
     /// Divergence-free SPH (Bender & Koschier 2015, 2017): an implicit incompressible solver
     /// whose time step follows the flow's CFL (`C Δx / v_max`, milliseconds), not the speed of
-    /// sound. **Experimental**: not yet stable at rest (see [`dfsph`](crate::fluid::dfsph)).
-    /// See [`DfsphSettings`].
+    /// sound. The default. See [`DfsphSettings`] and [`dfsph`](crate::fluid::dfsph).
+    #[default]
     Dfsph,
 }
 
@@ -166,7 +166,10 @@ impl std::error::Error for SphParamsError {}
 pub const MAX_WALL_PARTICLES: u64 = 4_000_000;
 
 impl SphParams {
-    /// Water in a 2 m × 1.2 m tank at 2 cm spacing (weakly compressible).
+    /// Water in a 2 m × 1.2 m tank at 2 cm spacing, incompressible ([`PressureSolver::Dfsph`],
+    /// support 2.5 spacings: about 20 neighbours; the lattice gradient correction keeps its
+    /// pressure exact). The speed of sound only scales the artificial viscosity here, and is
+    /// what [`water_wcsph`](Self::water_wcsph) steps at.
     pub fn water() -> Self {
         Self {
             rest_density: 1000.0,
@@ -176,15 +179,25 @@ impl SphParams {
             kinematic_viscosity: 1.0e-6,
             artificial_viscosity: 0.02,
             particle_spacing: 0.02,
-            support_ratio: 3.0,
+            support_ratio: 2.5,
             kernel: KernelKind::WendlandC2,
             gravity: Vec2::new(0.0, -STANDARD_GRAVITY),
             tank: Some(Tank::new(2.0, 1.2)),
             cfl_number: 0.4,
             max_substeps: 400,
             wall_restitution: 0.0,
-            solver: PressureSolver::Wcsph,
+            solver: PressureSolver::Dfsph,
             dfsph: DfsphSettings::default(),
+        }
+    }
+
+    /// [`water`](Self::water) on the weakly compressible solver ([`PressureSolver::Wcsph`]),
+    /// with the support of 3 spacings that its pressure gradient needs to be accurate.
+    pub fn water_wcsph() -> Self {
+        Self {
+            solver: PressureSolver::Wcsph,
+            support_ratio: 3.0,
+            ..Self::water()
         }
     }
 
@@ -213,7 +226,8 @@ impl SphParams {
             background_pressure: rest_density * speed_of_sound * speed_of_sound,
             kinematic_viscosity: 1.5e-5,
             artificial_viscosity: 0.05,
-            ..Self::water()
+            // A gas is its equation of state: weakly compressible.
+            ..Self::water_wcsph()
         }
     }
 

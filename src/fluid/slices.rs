@@ -115,6 +115,11 @@ impl SliceFluid {
         self.substep(|clock, _, stable, _| clock.take_free_substep(stable))
     }
 
+    /// What the last DFSPH sub-step's solves did (iterations and remaining errors).
+    pub fn dfsph_report(&self) -> &super::dfsph::DfsphReport {
+        &self.dfsph.report
+    }
+
     /// Mean number of particles (fluid and wall, the particle itself included) within the kernel
     /// support of each fluid particle, as of the last sub-step.
     pub fn mean_neighbors(&self) -> f64 {

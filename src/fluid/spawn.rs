@@ -208,7 +208,7 @@ mod tests {
     fn hydrostatic_rows_pack_with_depth() {
         let params = SphParams {
             particle_spacing: 0.01,
-            ..SphParams::default()
+            ..SphParams::water_wcsph()
         };
         let block = FluidBlock::dam_break(0.05, 0.5).with_jitter(0.0);
         let flat = block.with_hydrostatic(false).positions_for(&params);

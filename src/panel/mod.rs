@@ -433,7 +433,7 @@ fn fluid_section(ui: &mut egui::Ui, data: &mut PanelData) {
                 &PressureSolver::ALL,
                 |s| match s {
                     PressureSolver::Wcsph => "WCSPH",
-                    PressureSolver::Dfsph => "DFSPH (experimental)",
+                    PressureSolver::Dfsph => "DFSPH",
                 },
             );
             match p.solver {

@@ -9,15 +9,6 @@ use bevy_sph2d::fluid::{FluidBlock, SphParams, SphSolver};
 use bevy_sph2d::prelude::*;
 use std::time::Duration;
 
-/// Water on the divergence-free solver, as the crate's DFSPH settings have it.
-pub fn dfsph_water() -> SphParams {
-    SphParams {
-        solver: bevy_sph2d::fluid::PressureSolver::Dfsph,
-        support_ratio: 2.5,
-        ..SphParams::water()
-    }
-}
-
 /// Fixed tick of the test apps, s (a whole number of nanoseconds, as `Time<Fixed>` keeps it).
 pub const TICK: f64 = 0.016_666_666;
 
