@@ -38,7 +38,7 @@ usage: headless [options]
   --out FILE.csv              output file (default headless.csv)
   --jitter J                  spawn jitter, fraction of the spacing (default 0.0001)
   --solver dfsph|wcsph        pressure solver (default dfsph, incompressible)
-  --support-ratio R           kernel support / spacing (default 3 for wcsph, 2.5 for dfsph)
+  --support-ratio R           kernel support / spacing (default 3 for wcsph, 2 for dfsph)
   --kernel wendland|cubic|muller   (default wendland)
   --speed-of-sound C          m/s (default 20 sqrt(g * fluid height))
   --viscosity NU              kinematic viscosity, m^2/s (default 1e-6)
@@ -126,7 +126,7 @@ fn configure(args: &Args) -> Result<Config, String> {
     };
     let (solver, default_ratio) = match args.text("solver").unwrap_or("dfsph") {
         "wcsph" => (PressureSolver::Wcsph, 3.0),
-        "dfsph" => (PressureSolver::Dfsph, 2.5),
+        "dfsph" => (PressureSolver::Dfsph, 2.0),
         other => return Err(format!("unknown solver '{other}' (wcsph or dfsph)")),
     };
     let params = SphParams {

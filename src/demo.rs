@@ -29,7 +29,7 @@ impl SphDemoPlugin {
 
 /// Water tuned for interactive use in the scenario tank (1.6 m × 0.9 m), on the default
 /// incompressible solver:
-/// - support 2.5 spacings (about 20 neighbours);
+/// - the default support of 2 spacings (about 12 neighbours);
 /// - speed of sound 30 m/s, about six times the fastest flow of its dam break (4.6 m/s): what
 ///   WCSPH steps at if you pick it in the panel (the accurate `20 √(g H)` = 46 m/s costs it 1.5
 ///   times the sub-steps); DFSPH only scales its artificial viscosity with it;
@@ -39,7 +39,6 @@ pub fn demo_params() -> SphParams {
     SphParams {
         tank: Some(crate::fluid::scenario::SCENARIO_TANK),
         speed_of_sound: 30.0,
-        support_ratio: 2.5,
         max_substeps: 40,
         ..SphParams::water()
     }

@@ -45,9 +45,10 @@ pub struct SphParams {
     /// Initial particle spacing `Δx`, m. Sets particle mass and the resolution.
     pub particle_spacing: f32,
     /// Kernel support radius over particle spacing, `H/Δx` (1.5–5; 2 gives about 11 neighbours,
-    /// 2.6 about 21, 3 about 29). Smaller is faster but less accurate: on a square lattice the
-    /// discrete pressure gradient is 6% weak at 2, 4% at 2.6 and under 1% at 3, the default,
-    /// and hydrostatic pressure comes out high by as much.
+    /// 2.6 about 21, 3 about 29). Smaller is faster but less accurate. With WCSPH the discrete
+    /// pressure gradient on a square lattice is 6% weak at 2, 4% at 2.6 and under 1% at 3 (its
+    /// default), and hydrostatic pressure comes out high by as much; DFSPH corrects its
+    /// gradient on the lattice and defaults to 2.
     pub support_ratio: f32,
     /// Which kernels compute density and gradients.
     pub kernel: KernelKind,
@@ -167,8 +168,8 @@ pub const MAX_WALL_PARTICLES: u64 = 4_000_000;
 
 impl SphParams {
     /// Water in a 2 m × 1.2 m tank at 2 cm spacing, incompressible ([`PressureSolver::Dfsph`],
-    /// support 2.5 spacings: about 20 neighbours; the lattice gradient correction keeps its
-    /// pressure exact). The speed of sound only scales the artificial viscosity here, and is
+    /// support 2 spacings: about 12 neighbours, as SPlisHSPlasH's default; the lattice gradient
+    /// correction keeps its hydrostatic pressure exact). The speed of sound only scales the artificial viscosity here, and is
     /// what [`water_wcsph`](Self::water_wcsph) steps at.
     pub fn water() -> Self {
         Self {
@@ -179,7 +180,7 @@ impl SphParams {
             kinematic_viscosity: 1.0e-6,
             artificial_viscosity: 0.02,
             particle_spacing: 0.02,
-            support_ratio: 2.5,
+            support_ratio: 2.0,
             kernel: KernelKind::WendlandC2,
             gravity: Vec2::new(0.0, -STANDARD_GRAVITY),
             tank: Some(Tank::new(2.0, 1.2)),
