@@ -4,6 +4,7 @@
 mod common;
 
 use bevy::prelude::*;
+use bevy_sph2d::fluid::validation::{MartinMoyce, compare};
 use bevy_sph2d::fluid::{FluidBlock, SphParams, Tank};
 use bevy_sph2d::prelude::*;
 use common::*;
@@ -132,19 +133,6 @@ fn resting_layer(base: SphParams, within: Hydrostatics) {
     );
 }
 
-/// Martin & Moyce (1952), Phil. Trans. R. Soc. A 244, fig. 3, n² = 2, a = 2.25 in:
-/// dimensionless time `t √(2g/a)` and surge front position `Z/a`.
-const MARTIN_MOYCE: [(f32, f32); 8] = [
-    (0.832, 1.217),
-    (1.219, 1.474),
-    (1.997, 2.292),
-    (2.547, 2.995),
-    (3.345, 4.134),
-    (4.034, 4.944),
-    (4.418, 5.881),
-    (5.091, 6.980),
-];
-
 #[test]
 fn dam_break_front_follows_martin_and_moyce() {
     dam_break(SphParams::water_wcsph());
@@ -156,23 +144,18 @@ fn dam_break_front_follows_martin_and_moyce_dfsph() {
 }
 
 fn dam_break(base: SphParams) {
-    let a = 0.05;
-    let spacing = a / 20.0;
-    let params = SphParams {
-        particle_spacing: spacing,
-        speed_of_sound: SphParams::speed_of_sound_for_height(2.0 * a),
-        tank: Some(Tank::new(10.0 * a, 3.0 * a)),
-        ..base
-    };
+    let scene = MartinMoyce::default();
+    let params = scene.params(base);
+    let spacing = params.particle_spacing;
     let mut app = create_app(params.clone());
-    let ids = spawn(&mut app, FluidBlock::dam_break(a, 2.0 * a).with_seed(7));
+    let ids = spawn(&mut app, scene.block());
     assert_eq!(ids.len(), 20 * 40);
-    let time_scale = (2.0 * G / a).sqrt(); // t* = t √(2g/a)
+    let time_scale = scene.time_scale();
 
     let tank = params.tank.unwrap();
     let mut front = 0.0f32;
     let mut history = Vec::new();
-    while sim_time(&app) as f32 * time_scale < 5.2 {
+    while (sim_time(&app) as f32) * time_scale < MartinMoyce::END {
         run(&mut app, 1);
         let s = states(&mut app);
         assert!(all_finite(&s), "non-finite state at t = {}", sim_time(&app));
@@ -186,21 +169,18 @@ fn dam_break(base: SphParams) {
                 p.position
             );
         }
-        // The surge front: the farthest particle along the floor.
-        let now = s.iter().map(|p| p.position.x).fold(0.0, f32::max);
+        let now = scene.front(s.iter().map(|p| p.position));
         assert!(
-            now >= front - 0.1 * spacing,
+            now >= front - 0.1 * spacing / scene.column_width,
             "front moved back from {front} to {now} at t = {}",
             sim_time(&app)
         );
         front = front.max(now);
-        history.push((sim_time(&app) as f32 * time_scale, now / a));
+        history.push((sim_time(&app) as f32 * time_scale, now));
     }
-    // Compare with the experiment, interpolating our front at each measured time. SPH runs a
-    // little ahead early on (the experiment's gate took time to clear), so allow -10%..+25%.
-    for (t_star, z_exp) in MARTIN_MOYCE {
-        let z = interpolate(&history, t_star);
-        let ratio = z / z_exp;
+    // SPH runs a little ahead early on (the experiment's gate took time to clear), so allow
+    // -10%..+25%.
+    for (t_star, z, z_exp, ratio) in compare(&history) {
         println!(
             "{:?} t√(2g/a) = {t_star}: front {z:.3} a, experiment {z_exp} a, ratio {ratio:.3}",
             params.solver
@@ -210,18 +190,6 @@ fn dam_break(base: SphParams) {
             "at t√(2g/a) = {t_star}: front at {z:.2} a, experiment {z_exp} a"
         );
     }
-}
-
-fn interpolate(history: &[(f32, f32)], t: f32) -> f32 {
-    let k = history
-        .iter()
-        .position(|&(ti, _)| ti >= t)
-        .expect("ran long enough");
-    if k == 0 {
-        return history[0].1;
-    }
-    let ((t0, z0), (t1, z1)) = (history[k - 1], history[k]);
-    z0 + (z1 - z0) * (t - t0) / (t1 - t0)
 }
 
 #[test]

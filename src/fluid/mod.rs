@@ -14,6 +14,7 @@ pub mod slices;
 pub mod solver;
 pub mod spawn;
 pub mod systems;
+pub mod validation;
 pub mod wcsph;
 
 use bevy::ecs::intern::Interned;
