@@ -136,16 +136,18 @@ fn main() {
         .build()
         .expect("rayon pool");
     let constants = params.constants().expect("validated above");
-    let (slices_seconds, neighbours) = pool.install(|| {
+    let (slices_seconds, neighbours, slices_iterations) = pool.install(|| {
         let mut fluid = SliceFluid::new(constants, positions.clone(), &[]);
         for _ in 0..WARM_UP {
             fluid.step();
         }
+        let before = fluid.iterations;
         let started = Instant::now();
         for _ in 0..steps {
             fluid.step();
         }
-        (started.elapsed().as_secs_f64(), fluid.mean_neighbors())
+        let seconds = started.elapsed().as_secs_f64();
+        (seconds, fluid.mean_neighbors(), fluid.iterations - before)
     });
     drop(pool);
 
@@ -165,30 +167,36 @@ fn main() {
     for _ in 0..WARM_UP.div_ceil(SUBSTEPS_PER_TICK as usize) {
         app.update();
     }
-    let before = app.world().resource::<SphSolver>().clock().total_substeps;
+    let solver_state = app.world().resource::<SphSolver>();
+    let before = solver_state.clock().total_substeps;
+    let iterations_before = solver_state.iterations().total;
     let started = Instant::now();
     for _ in 0..ticks {
         app.update();
     }
     let ecs_seconds = started.elapsed().as_secs_f64();
-    let ecs_steps = (app.world().resource::<SphSolver>().clock().total_substeps - before) as usize;
+    let solver_state = app.world().resource::<SphSolver>();
+    let ecs_steps = (solver_state.clock().total_substeps - before) as usize;
+    let ecs_iterations = solver_state.iterations().total - iterations_before;
     let stats = app.world().resource::<SphStats>();
     assert_eq!(stats.particles, particles, "the ECS lost particles");
 
-    let line = |path: &str, steps: usize, seconds: f64| {
+    let line = |path: &str, steps: usize, seconds: f64, iterations: u64| {
         println!(
             "path={path} particles={particles} steps={steps} threads={threads} \
-             neighbours={neighbours:.1} ms_per_step={:.3} particle_steps_per_s={:.0}",
+             neighbours={neighbours:.1} ms_per_step={:.3} particle_steps_per_s={:.0} \
+             iterations_per_step={:.2}",
             1000.0 * seconds / steps as f64,
-            (particles * steps) as f64 / seconds
+            (particles * steps) as f64 / seconds,
+            iterations as f64 / steps as f64
         );
     };
     eprintln!(
         "ecs / slices time per step: {:.3}",
         (ecs_seconds / ecs_steps as f64) / (slices_seconds / steps as f64)
     );
-    line("slices", steps, slices_seconds);
-    line("ecs", ecs_steps, ecs_seconds);
+    line("slices", steps, slices_seconds, slices_iterations);
+    line("ecs", ecs_steps, ecs_seconds, ecs_iterations);
 }
 
 /// The demo's dam break through the ECS for one simulated second: how fast it runs against the

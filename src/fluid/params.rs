@@ -129,9 +129,9 @@ pub struct DfsphSettings {
 impl Default for DfsphSettings {
     fn default() -> Self {
         Self {
-            cfl_number: 0.6,
+            cfl_number: 0.7,
             max_time_step: 0.005,
-            density_tolerance: 0.0003,
+            density_tolerance: 0.0001,
             divergence_tolerance: 0.01,
             max_density_iterations: 100,
             max_divergence_iterations: 100,

@@ -65,10 +65,15 @@ impl Parallel for ComputePool {
             items.iter_mut().for_each(work);
             return;
         }
+        // One task per thread over a contiguous run of items: a task per item cost more in
+        // spawning than a small item's work (measured: a DFSPH sub-step of 20,000 particles
+        // took 27 ms on two threads this way against 17 ms on rayon).
+        let pool = ComputeTaskPool::get();
+        let per_task = items.len().div_ceil(pool.thread_num().max(1));
         let work = &work;
-        ComputeTaskPool::get().scope(|scope| {
-            for item in items {
-                scope.spawn(async move { work(item) });
+        pool.scope(|scope| {
+            for group in items.chunks_mut(per_task) {
+                scope.spawn(async move { group.iter_mut().for_each(work) });
             }
         });
     }
