@@ -26,13 +26,17 @@
 //! it once: mirrored, the pressure at a wall is the hydrostatic one, not twice it). Mirroring
 //! both the pressure and the velocity keeps the pressure equations symmetric (the push is the
 //! transpose of the density rate); mirroring the pressure alone made the wall rows of a resting
-//! layer bounce at 0.4 m/s under a 0.1% tolerance. They are
-//! Bender & Koschier's Jacobi iterations with the exact diagonal `1/(dt² αᵢ)`, projected so that
-//! no stiffness goes below zero (pressure pushes, never pulls: a particle that is not compressed
-//! relaxes to zero pressure instead of holding the last sub-step's), and stop at a mean error
-//! under the settings' tolerances. The stiffness is a pressure per rest density (`p = ρ₀ κ`,
-//! m²/s²), independent of the step, so it warm-starts the next sub-step (the divergence solve
-//! from half of it, as Bender & Koschier do).
+//! layer bounce at 0.4 m/s under a 0.1% tolerance.
+//!
+//! The solves are Bender & Koschier's Jacobi iterations with the exact diagonal `1/(dt² αᵢ)`,
+//! relaxed (their plain update diverges in 2D, see `lattice_spectral_radius`), accelerated by
+//! Chebyshev's recurrence (`CHEBYSHEV_RADIUS`), projected so that no stiffness goes below zero
+//! (pressure pushes, never pulls: a particle that is not compressed relaxes to zero pressure
+//! instead of holding the last sub-step's), and stop at a mean error under the settings'
+//! tolerances. The stiffness is a pressure per rest density (`p = ρ₀ κ`, m²/s²), independent of
+//! the step, so it warm-starts the next sub-step: the density solve from its SPH average
+//! ([`Dfsph::prepare`] smooths it, so that the stiffness modes the equations cannot see do not
+//! pile up), the divergence solve from half of it, as Bender & Koschier do.
 //!
 //! Wall particles lie on the fluid's rest lattice and count with the fluid's particle volume in
 //! the density sum, so a particle at a wall has rest density at rest. Kernel gradients carry the

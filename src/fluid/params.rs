@@ -107,8 +107,9 @@ impl PressureSolver {
 #[derive(Reflect, Debug, Clone, Copy, PartialEq)]
 #[reflect(Default, Debug, PartialEq)]
 pub struct DfsphSettings {
-    /// Courant number `C` of the flow's time-step limit `dt = C Δx / v_max`, 0.05–1 (0.5: no
-    /// particle moves more than half a spacing per step).
+    /// Courant number `C` of the flow's time-step limit `dt = C Δx / v_max`, 0.05–1 (the default
+    /// 0.7: no particle moves more than 0.7 spacings per step; the dam-break tests pass with it,
+    /// and it takes a sixth fewer sub-steps than 0.6).
     pub cfl_number: f32,
     /// Longest sub-step, s (the limit when the fluid is at rest).
     pub max_time_step: f32,

@@ -29,23 +29,31 @@ use core::sync::atomic::{AtomicU32, Ordering};
 /// costs more than it saves.
 const MIN_PARALLEL_CHUNK: usize = 1024;
 
-/// Several batches per thread even out the uneven cost of particles (a free-surface particle
-/// has half the neighbours of an interior one).
+/// One batch per thread: each task Bevy's pool starts costs more than the unevenness it would
+/// even out (measured with the `bench` example, WCSPH, 2 threads: at 2,520 particles a
+/// sub-step took 0.52 ms with eight batches per thread and 0.47 ms with one; at 100,000 the
+/// same).
 const BATCHING: BatchingStrategy = BatchingStrategy {
     batch_size_limits: MIN_PARALLEL_CHUNK..usize::MAX,
-    batches_per_thread: 8,
+    batches_per_thread: 1,
 };
 
-/// Below this many particles the per-particle passes run on the calling thread: waking Bevy's
-/// compute threads for a pass costs more than the pass (measured with the `bench` example).
-pub const MIN_PARALLEL_PARTICLES: usize = 4096;
+/// Below this many particles the per-particle passes over neighbours (WCSPH's density and
+/// forces) run on the calling thread: a pass is then shorter than waking a thread (measured with
+/// the `bench` example).
+pub const MIN_PARALLEL_PARTICLES: usize = 1024;
 
-/// Runs `$work` over `$query`'s items, in parallel batches from [`MIN_PARALLEL_PARTICLES`]
-/// particles (`$n`) on, on the calling thread below.
+/// The same for passes without neighbour loops (integration, copying solver results into the
+/// components): at the demo's 2,500 particles running them in parallel made the DFSPH dam break
+/// 8% slower.
+pub const MIN_PARALLEL_LIGHT_PARTICLES: usize = 8192;
+
+/// Runs `$work` over `$query`'s items, in parallel batches from `$min` particles (`$n`) on, on
+/// the calling thread below.
 macro_rules! for_each_particle {
-    ($query:expr, $n:expr, $data:ty, $work:expr) => {{
+    ($query:expr, $n:expr, $min:expr, $data:ty, $work:expr) => {{
         let work = |item: QueryItem<'_, '_, $data>| ($work)(item);
-        if $n < MIN_PARALLEL_PARTICLES {
+        if $n < $min {
             $query.iter_mut().for_each(work);
         } else {
             $query
@@ -447,33 +455,33 @@ pub(crate) fn compute_density(
     let c = solver.constants;
     let n = solver.snapshot.len();
     with_kernels!(c.kernel, c.support, |w, _g| {
-        for_each_particle!(particles, n, DensityData, |(
-            position,
-            slot,
-            mut density,
-            mut pressure,
-            mut neighbors,
-        ): QueryItem<
-            '_,
-            '_,
+        for_each_particle!(
+            particles,
+            n,
+            MIN_PARALLEL_PARTICLES,
             DensityData,
-        >| {
-            let rho = density_and_neighbors_at(
-                &w,
-                &c,
-                position.0,
-                &solver.snapshot,
-                &solver.walls,
-                &mut neighbors.0,
-            );
-            let p = pressure_from_density(&c, rho);
-            density.0 = rho;
-            pressure.0 = p;
-            // A particle spawned since the snapshot was built has no slot in it.
-            if slot.generation == solver.generation {
-                solver.snapshot.set_pressure(slot.slot as usize, rho, p);
+            |(position, slot, mut density, mut pressure, mut neighbors): QueryItem<
+                '_,
+                '_,
+                DensityData,
+            >| {
+                let rho = density_and_neighbors_at(
+                    &w,
+                    &c,
+                    position.0,
+                    &solver.snapshot,
+                    &solver.walls,
+                    &mut neighbors.0,
+                );
+                let p = pressure_from_density(&c, rho);
+                density.0 = rho;
+                pressure.0 = p;
+                // A particle spawned since the snapshot was built has no slot in it.
+                if slot.generation == solver.generation {
+                    solver.snapshot.set_pressure(slot.slot as usize, rho, p);
+                }
             }
-        });
+        );
     });
 }
 
@@ -528,30 +536,29 @@ pub(crate) fn compute_forces(
     let c = solver.constants;
     let n = solver.snapshot.len();
     with_kernels!(c.kernel, c.support, |_w, g| {
-        for_each_particle!(particles, n, ForceData, |(
-            position,
-            velocity,
-            density,
-            pressure,
-            neighbors,
-            mut acceleration,
-        ): QueryItem<
-            '_,
-            '_,
+        for_each_particle!(
+            particles,
+            n,
+            MIN_PARALLEL_PARTICLES,
             ForceData,
-        >| {
-            acceleration.0 = acceleration_at(
-                &g,
-                &c,
-                position.0,
-                velocity.0,
-                density.0,
-                pressure.0,
-                &neighbors.0,
-                &solver.snapshot,
-                &solver.walls,
-            );
-        });
+            |(position, velocity, density, pressure, neighbors, mut acceleration): QueryItem<
+                '_,
+                '_,
+                ForceData,
+            >| {
+                acceleration.0 = acceleration_at(
+                    &g,
+                    &c,
+                    position.0,
+                    velocity.0,
+                    density.0,
+                    pressure.0,
+                    &neighbors.0,
+                    &solver.snapshot,
+                    &solver.walls,
+                );
+            }
+        );
     });
 }
 
@@ -599,6 +606,7 @@ pub(crate) fn integrate_particles(
         for_each_particle!(
             particles,
             solver.snapshot.len(),
+            MIN_PARALLEL_LIGHT_PARTICLES,
             MoveData,
             |(mut position, mut velocity, acceleration): QueryItem<'_, '_, MoveData>| {
                 if !advance_particle(
@@ -664,6 +672,7 @@ pub(crate) fn compute_dfsph_forces(
     for_each_particle!(
         particles,
         snapshot.len(),
+        MIN_PARALLEL_LIGHT_PARTICLES,
         DfsphForceData,
         |(slot, mut velocity, mut density, mut acceleration): QueryItem<'_, '_, DfsphForceData>| {
             if let Some(slot) = solver.dfsph_slot(slot) {
@@ -730,6 +739,7 @@ pub(crate) fn integrate_dfsph(
         for_each_particle!(
             particles,
             solver.snapshot.len(),
+            MIN_PARALLEL_LIGHT_PARTICLES,
             DfsphMoveData,
             |(slot, mut position, mut velocity, mut pressure, mut stiffness, acceleration): QueryItem<
                 '_,
