@@ -13,7 +13,7 @@
 //! 0 for WCSPH).
 //!
 //! The fluid's last two lines read
-//! `path=slices|ecs particles=N steps=K threads=T neighbours=X ms_per_step=Y particle_steps_per_s=Z`,
+//! `path=slices|ecs particles=N steps=K threads=T neighbours=X ms_per_step=Y particle_steps_per_s=Z iterations_per_step=I`,
 //! where a step is one solver sub-step and `neighbours` the mean number of particles within the
 //! kernel support (the particle itself and wall particles included).
 //!
