@@ -89,8 +89,6 @@ struct Neighbor {
     slot: u32,
     /// `s V ∇Wᵢⱼ`, 1/m.
     gradient: Vec2,
-    /// `V Wᵢⱼ`, the neighbour's share of the particle's density (dimensionless).
-    weight: f32,
 }
 
 /// Per-particle values of the current sub-step, by sorted slot.
@@ -139,6 +137,9 @@ pub struct DfsphReport {
 pub struct Dfsph {
     stride: usize,
     rows: Vec<Neighbor>,
+    /// `V Wᵢⱼ` of each cached neighbour, laid out as `rows` (the neighbour's share of the
+    /// particle's density; apart from `rows`, which the iterations read, to keep those short).
+    weights: Vec<f32>,
     state: Vec<SlotState>,
     velocity: Vec<Vec2>,
     acceleration: SlotVectors,
@@ -201,6 +202,7 @@ impl Dfsph {
             // Rows are written before they are read (up to each particle's count).
             if self.rows.len() != n * stride {
                 self.rows.resize(n * stride, Neighbor::default());
+                self.weights.resize(n * stride, 0.0);
             }
             let overflow = with_kernels!(c.kernel, c.support, |w, g| {
                 self.gather_neighbors(&w, &g, c, fluid, walls, stride, parallel)
@@ -243,98 +245,106 @@ impl Dfsph {
             .state
             .chunks_mut(CHUNK)
             .zip(self.rows.chunks_mut(CHUNK * stride))
+            .zip(self.weights.chunks_mut(CHUNK * stride))
             .enumerate()
-            .map(|(k, (state, rows))| (k * CHUNK, state, rows, false))
+            .map(|(k, ((state, rows), weights))| (k * CHUNK, state, rows, weights, false))
             .collect();
-        run_jobs(parallel, n, &mut jobs, |(start, states, rows, overflow)| {
-            for (k, state) in states.iter_mut().enumerate() {
-                let x = fluid.points.get(*start + k);
-                let row = &mut rows[k * stride..(k + 1) * stride];
-                let mut len = 0usize;
-                let mut density = Vec4::ZERO;
-                let (mut sum_x, mut sum_y, mut sum_sq) = (Vec4::ZERO, Vec4::ZERO, Vec4::ZERO);
-                fluid.points.for_each_batch(x, |first, dx, dy, r2| {
-                    let values = w.value_sq_x4(r2);
-                    density += values;
-                    let inside = r2.cmplt(support_sq) & r2.cmpgt(tiny);
-                    let mut mask = inside.bitmask();
-                    if mask == 0 {
-                        return;
-                    }
-                    let slope = g.derivative_over_r_x4(r2.min(support_sq).sqrt());
-                    // ∇ᵢWᵢⱼ = slope (xᵢ − xⱼ) = −slope (dx, dy); zero on lanes outside.
-                    let scale = Vec4::select(inside, -scaled_volume * slope, Vec4::ZERO);
-                    let (gx, gy) = (scale * dx, scale * dy);
-                    sum_x += gx;
-                    sum_y += gy;
-                    sum_sq += gx * gx + gy * gy;
-                    let (gx, gy) = (gx.to_array(), gy.to_array());
-                    let values = (c.volume * values).to_array();
-                    while mask != 0 {
-                        let lane = mask.trailing_zeros() as usize;
-                        mask &= mask - 1;
-                        if len < stride {
-                            row[len] = Neighbor {
-                                slot: (first + lane) as u32,
-                                gradient: Vec2::new(gx[lane], gy[lane]),
-                                weight: values[lane],
-                            };
+        run_jobs(
+            parallel,
+            n,
+            &mut jobs,
+            |(start, states, rows, weights, overflow)| {
+                for (k, state) in states.iter_mut().enumerate() {
+                    let x = fluid.points.get(*start + k);
+                    let row = &mut rows[k * stride..(k + 1) * stride];
+                    let row_weights = &mut weights[k * stride..(k + 1) * stride];
+                    let mut len = 0usize;
+                    let mut density = Vec4::ZERO;
+                    let (mut sum_x, mut sum_y, mut sum_sq) = (Vec4::ZERO, Vec4::ZERO, Vec4::ZERO);
+                    fluid.points.for_each_batch(x, |first, dx, dy, r2| {
+                        let values = w.value_sq_x4(r2);
+                        density += values;
+                        let inside = r2.cmplt(support_sq) & r2.cmpgt(tiny);
+                        let mut mask = inside.bitmask();
+                        if mask == 0 {
+                            return;
                         }
-                        len += 1;
-                    }
-                });
-                let sum = Vec2::new(sum_x.element_sum(), sum_y.element_sum());
-                let sum_sq = sum_sq.element_sum();
-                let mut wall_gradient = Vec2::ZERO;
-                let mut wall_viscosity = 0.0f32;
-                let mut wall_count = 0u32;
-                let mut wall_head = Vec2::ZERO;
-                walls.points.for_each_batch(x, |_, dx, dy, r2| {
-                    density += w.value_sq_x4(r2);
-                    let inside = r2.cmplt(support_sq) & r2.cmpgt(tiny);
-                    let mask = inside.bitmask();
-                    if mask == 0 {
-                        return;
-                    }
-                    let r2 = r2.min(support_sq);
-                    let slope = g.derivative_over_r_x4(r2.sqrt());
-                    let gx = (-scaled_volume * slope * dx).to_array();
-                    let gy = (-scaled_volume * slope * dy).to_array();
-                    let friction = (c.volume * slope * r2 / (r2 + Vec4::splat(eta_sq))).to_array();
-                    let head =
-                        (Vec4::splat(c.gravity.x) * dx + Vec4::splat(c.gravity.y) * dy).to_array();
-                    for lane in 0..4 {
-                        if mask & (1 << lane) != 0 {
-                            let gradient = Vec2::new(gx[lane], gy[lane]);
-                            wall_gradient += gradient;
-                            wall_viscosity += friction[lane];
-                            wall_head -= head[lane] * gradient;
-                            wall_count += 1;
+                        let slope = g.derivative_over_r_x4(r2.min(support_sq).sqrt());
+                        // ∇ᵢWᵢⱼ = slope (xᵢ − xⱼ) = −slope (dx, dy); zero on lanes outside.
+                        let scale = Vec4::select(inside, -scaled_volume * slope, Vec4::ZERO);
+                        let (gx, gy) = (scale * dx, scale * dy);
+                        sum_x += gx;
+                        sum_y += gy;
+                        sum_sq += gx * gx + gy * gy;
+                        let (gx, gy) = (gx.to_array(), gy.to_array());
+                        let values = (c.volume * values).to_array();
+                        while mask != 0 {
+                            let lane = mask.trailing_zeros() as usize;
+                            mask &= mask - 1;
+                            if len < stride {
+                                row[len] = Neighbor {
+                                    slot: (first + lane) as u32,
+                                    gradient: Vec2::new(gx[lane], gy[lane]),
+                                };
+                                row_weights[len] = values[lane];
+                            }
+                            len += 1;
                         }
+                    });
+                    let sum = Vec2::new(sum_x.element_sum(), sum_y.element_sum());
+                    let sum_sq = sum_sq.element_sum();
+                    let mut wall_gradient = Vec2::ZERO;
+                    let mut wall_viscosity = 0.0f32;
+                    let mut wall_count = 0u32;
+                    let mut wall_head = Vec2::ZERO;
+                    walls.points.for_each_batch(x, |_, dx, dy, r2| {
+                        density += w.value_sq_x4(r2);
+                        let inside = r2.cmplt(support_sq) & r2.cmpgt(tiny);
+                        let mask = inside.bitmask();
+                        if mask == 0 {
+                            return;
+                        }
+                        let r2 = r2.min(support_sq);
+                        let slope = g.derivative_over_r_x4(r2.sqrt());
+                        let gx = (-scaled_volume * slope * dx).to_array();
+                        let gy = (-scaled_volume * slope * dy).to_array();
+                        let friction =
+                            (c.volume * slope * r2 / (r2 + Vec4::splat(eta_sq))).to_array();
+                        let head = (Vec4::splat(c.gravity.x) * dx + Vec4::splat(c.gravity.y) * dy)
+                            .to_array();
+                        for lane in 0..4 {
+                            if mask & (1 << lane) != 0 {
+                                let gradient = Vec2::new(gx[lane], gy[lane]);
+                                wall_gradient += gradient;
+                                wall_viscosity += friction[lane];
+                                wall_head -= head[lane] * gradient;
+                                wall_count += 1;
+                            }
+                        }
+                    });
+                    if len > stride {
+                        *overflow = true;
                     }
-                });
-                if len > stride {
-                    *overflow = true;
+                    // A particle's own stiffness changes its density rate through its own velocity
+                    // (pushed by its neighbours and the mirrored wall) and its neighbours'.
+                    let diagonal = (sum + WALL_MIRROR * wall_gradient).length_squared() + sum_sq;
+                    *state = SlotState {
+                        count: len.min(stride) as u32,
+                        density: c.volume * density.element_sum(),
+                        factor: if diagonal > 1e-6 / c.support_sq {
+                            1.0 / diagonal
+                        } else {
+                            0.0
+                        },
+                        deficient: ((len as u32 + wall_count) as f32) < deficient_below,
+                        wall_gradient,
+                        wall_viscosity,
+                        wall_head,
+                    };
                 }
-                // A particle's own stiffness changes its density rate through its own velocity
-                // (pushed by its neighbours and the mirrored wall) and its neighbours'.
-                let diagonal = (sum + WALL_MIRROR * wall_gradient).length_squared() + sum_sq;
-                *state = SlotState {
-                    count: len.min(stride) as u32,
-                    density: c.volume * density.element_sum(),
-                    factor: if diagonal > 1e-6 / c.support_sq {
-                        1.0 / diagonal
-                    } else {
-                        0.0
-                    },
-                    deficient: ((len as u32 + wall_count) as f32) < deficient_below,
-                    wall_gradient,
-                    wall_viscosity,
-                    wall_head,
-                };
-            }
-        });
-        jobs.iter().any(|job| job.3)
+            },
+        );
+        jobs.iter().any(|job| job.4)
     }
 
     /// Replaces the density solve's warm start by its SPH average over each particle's
@@ -347,16 +357,17 @@ impl Dfsph {
     fn smooth_warm_start(&mut self, c: &SphConstants, parallel: &impl Parallel) {
         let own = with_kernels!(c.kernel, c.support, |w, _g| c.volume
             * w.value_sq_x4(Vec4::ZERO).x);
-        let (rows, state, kappa) = (&self.rows, &self.state, &self.kappa);
+        let (rows, weights) = (&self.rows, &self.weights);
+        let (state, kappa) = (&self.state, &self.kappa);
         let stride = self.stride;
         let mut smoothed = core::mem::take(&mut self.scratch.delta);
         smoothed.resize(kappa.len(), 0.0);
         for_each_slot(&mut smoothed, parallel, |slot, out| {
-            let row = &rows[slot * stride..slot * stride + state[slot].count as usize];
+            let range = slot * stride..slot * stride + state[slot].count as usize;
             let (mut sum, mut weight) = (own * kappa[slot], own);
-            for neighbor in row {
-                sum += neighbor.weight * kappa[neighbor.slot as usize];
-                weight += neighbor.weight;
+            for (neighbor, &w) in rows[range.clone()].iter().zip(&weights[range]) {
+                sum += w * kappa[neighbor.slot as usize];
+                weight += w;
             }
             *out = sum / weight;
             0.0
