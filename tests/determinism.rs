@@ -26,11 +26,20 @@ fn params_for(solver: PressureSolver) -> SphParams {
     }
 }
 
-/// The solver a helper process runs (`SPH_TEST_SOLVER`, WCSPH when unset).
-fn solver_from_env() -> PressureSolver {
-    match std::env::var("SPH_TEST_SOLVER").as_deref() {
-        Ok("dfsph") => PressureSolver::Dfsph,
-        _ => PressureSolver::Wcsph,
+/// DFSPH at a spacing fine enough (over 8,192 particles) for its solver passes and the ECS's
+/// light passes to run in parallel chunks.
+fn dfsph_fine() -> SphParams {
+    SphParams {
+        particle_spacing: 0.0022,
+        ..params_for(PressureSolver::Dfsph)
+    }
+}
+
+/// What a helper process runs (`SPH_TEST_CASE`: `wcsph`, the default, or `dfsph-fine`).
+fn case_from_env() -> (SphParams, usize) {
+    match std::env::var("SPH_TEST_CASE").as_deref() {
+        Ok("dfsph-fine") => (dfsph_fine(), 4),
+        _ => (params(), 25),
     }
 }
 
@@ -62,10 +71,14 @@ fn fingerprint(states: &[State]) -> u64 {
 }
 
 fn run_ecs(seed: u64, app: &mut App) -> u64 {
+    run_ecs_ticks(seed, app, 25)
+}
+
+fn run_ecs_ticks(seed: u64, app: &mut App, ticks: usize) -> u64 {
     app.world_mut()
         .spawn(Obstacle::circle(Vec2::new(0.4, 0.05), 0.05));
     spawn(app, block(seed));
-    run(app, 25);
+    run(app, ticks);
     fingerprint(&states(app))
 }
 
@@ -95,27 +108,33 @@ fn fingerprint_with_threads_from_env() {
     let mut app = App::new();
     app.add_plugins((
         MinimalPlugins.set(bevy_sph2d::task_pool_plugin(threads)),
-        bevy_sph2d::fluid::SphPlugin::default().with_params(params_for(solver_from_env())),
+        bevy_sph2d::fluid::SphPlugin::default().with_params(case_from_env().0),
     ))
     .insert_resource(Time::<Fixed>::from_duration(
         std::time::Duration::from_secs_f64(TICK),
     ))
     .insert_resource(bevy::time::TimeUpdateStrategy::FixedTimesteps(1));
     let actual = bevy::tasks::ComputeTaskPool::get().thread_num();
-    println!("fingerprint={} threads={actual}", run_ecs(1, &mut app));
+    let ticks = case_from_env().1;
+    println!(
+        "fingerprint={} threads={actual}",
+        run_ecs_ticks(1, &mut app, ticks)
+    );
 }
 
 #[test]
 fn ecs_is_deterministic_across_thread_counts() {
-    ecs_across_thread_counts(PressureSolver::Wcsph, "wcsph");
+    ecs_across_thread_counts("wcsph", params(), 25);
 }
 
 #[test]
 fn ecs_is_deterministic_across_thread_counts_dfsph() {
-    ecs_across_thread_counts(PressureSolver::Dfsph, "dfsph");
+    let p = dfsph_fine();
+    assert!(block(1).positions_for(&p).len() > bevy_sph2d::fluid::dfsph::PARALLEL_SLOTS);
+    ecs_across_thread_counts("dfsph-fine", p, 4);
 }
 
-fn ecs_across_thread_counts(solver: PressureSolver, name: &str) {
+fn ecs_across_thread_counts(case: &str, p: SphParams, ticks: usize) {
     let exe = std::env::current_exe().expect("test binary");
     let fingerprints: Vec<(String, String)> = [1, 2, 4]
         .iter()
@@ -128,7 +147,7 @@ fn ecs_across_thread_counts(solver: PressureSolver, name: &str) {
                     "--nocapture",
                 ])
                 .env("SPH_TEST_THREADS", threads.to_string())
-                .env("SPH_TEST_SOLVER", name)
+                .env("SPH_TEST_CASE", case)
                 .output()
                 .expect("run the helper");
             let stdout = String::from_utf8_lossy(&out.stdout);
@@ -149,7 +168,7 @@ fn ecs_across_thread_counts(solver: PressureSolver, name: &str) {
         "results depend on the thread count: {fingerprints:?}"
     );
     // And they equal the in-process run, whatever its pool.
-    let here = run_ecs(1, &mut create_app(params_for(solver)));
+    let here = run_ecs_ticks(1, &mut create_app(p), ticks);
     assert_eq!(fingerprints[0].0, format!("fingerprint={here}"));
 }
 
@@ -188,10 +207,7 @@ fn slices_are_deterministic_across_thread_counts() {
 #[test]
 fn dfsph_slices_are_deterministic_across_thread_counts() {
     // Fine enough for the solver's passes to run in parallel chunks.
-    let p = SphParams {
-        particle_spacing: 0.0022,
-        ..params_for(PressureSolver::Dfsph)
-    };
+    let p = dfsph_fine();
     let positions = block(1).positions_for(&p);
     assert!(positions.len() > bevy_sph2d::fluid::dfsph::PARALLEL_SLOTS);
     check_slices_across_thread_counts(&p, &positions, 5);
