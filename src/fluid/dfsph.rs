@@ -55,13 +55,14 @@ use super::solver::{SphConstants, with_kernels};
 use bevy::math::{Vec2, Vec4};
 
 /// Slots per parallel task, fixed (not from the thread count) so that sums over slots add up in
-/// the same order on any number of threads.
-pub const CHUNK: usize = 512;
+/// the same order on any number of threads. Measured with the `bench` example, the demo's dam
+/// break at 2,500 particles on two threads: 1.37x real time with 256, 1.22x with 512.
+pub const CHUNK: usize = 256;
 
-/// Fewest particles whose passes run in parallel (measured with the `bench` example: at 2,500
-/// particles, run in parallel from 1,024 on, the demo's dam break ran no faster on two threads
-/// than on one; a pass there is tens of microseconds, about the cost of waking a thread).
-pub const PARALLEL_SLOTS: usize = 8192;
+/// Fewest particles whose passes run in parallel. Worth it only on a pool whose threads stay
+/// awake between passes (the ECS runs each solve as one rayon region for that): at 2,500
+/// particles a pass is tens of microseconds, less than waking a sleeping thread.
+pub const PARALLEL_SLOTS: usize = 1024;
 
 /// The spectral radius the Chebyshev acceleration of the Jacobi iterations assumes (Golub &
 /// Varga 1961; Wang 2015 for projected iterations): the convergence factor of the smoothest
@@ -193,24 +194,24 @@ impl Dfsph {
             self.kappa[slot] = k.x.max(0.0);
             self.kappa_divergence[slot] = k.y.max(0.0);
         }
-        // Room for a compressed neighbourhood; a particle with more doubles it and tries again.
-        let ratio = c.support / c.spacing;
-        let mut stride = ((core::f32::consts::PI * ratio * ratio * 1.5) as usize + 8)
-            .next_multiple_of(4)
-            .max(self.stride);
+        // Rows a little longer than a rest neighbourhood: the iterations stream them, so they are
+        // kept short. A compressed particle with more neighbours makes them long enough for the
+        // most seen, and the pass runs again.
+        let lattice = lattice_neighbors(c) as usize;
+        let mut stride = (lattice + lattice / 2).next_multiple_of(4).max(self.stride);
         loop {
             // Rows are written before they are read (up to each particle's count).
             if self.rows.len() != n * stride {
                 self.rows.resize(n * stride, Neighbor::default());
                 self.weights.resize(n * stride, 0.0);
             }
-            let overflow = with_kernels!(c.kernel, c.support, |w, g| {
+            let most = with_kernels!(c.kernel, c.support, |w, g| {
                 self.gather_neighbors(&w, &g, c, fluid, walls, stride, parallel)
             });
-            if !overflow {
+            if most <= stride {
                 break;
             }
-            stride *= 2;
+            stride = (most + 4).next_multiple_of(4);
         }
         self.stride = stride;
         self.report = DfsphReport::default();
@@ -224,6 +225,8 @@ impl Dfsph {
         }
     }
 
+    /// The neighbour pass of [`prepare`](Self::prepare): fills rows of `stride` entries and
+    /// returns the most neighbours any particle has (more than `stride`: the rows were short).
     #[expect(clippy::too_many_arguments, reason = "one pass, spelled out")]
     fn gather_neighbors<W: RadialKernel, G: RadialKernel>(
         &mut self,
@@ -234,7 +237,7 @@ impl Dfsph {
         walls: &Walls,
         stride: usize,
         parallel: &impl Parallel,
-    ) -> bool {
+    ) -> usize {
         let n = self.state.len();
         let scaled_volume = c.gradient_scale * c.volume;
         let deficient_below = DEFICIENT_NEIGHBORHOOD * lattice_neighbors(c) as f32;
@@ -247,13 +250,13 @@ impl Dfsph {
             .zip(self.rows.chunks_mut(CHUNK * stride))
             .zip(self.weights.chunks_mut(CHUNK * stride))
             .enumerate()
-            .map(|(k, ((state, rows), weights))| (k * CHUNK, state, rows, weights, false))
+            .map(|(k, ((state, rows), weights))| (k * CHUNK, state, rows, weights, 0usize))
             .collect();
         run_jobs(
             parallel,
             n,
             &mut jobs,
-            |(start, states, rows, weights, overflow)| {
+            |(start, states, rows, weights, most)| {
                 for (k, state) in states.iter_mut().enumerate() {
                     let x = fluid.points.get(*start + k);
                     let row = &mut rows[k * stride..(k + 1) * stride];
@@ -322,9 +325,7 @@ impl Dfsph {
                             }
                         }
                     });
-                    if len > stride {
-                        *overflow = true;
-                    }
+                    *most = (*most).max(len);
                     // A particle's own stiffness changes its density rate through its own velocity
                     // (pushed by its neighbours and the mirrored wall) and its neighbours'.
                     let diagonal = (sum + WALL_MIRROR * wall_gradient).length_squared() + sum_sq;
@@ -344,7 +345,7 @@ impl Dfsph {
                 }
             },
         );
-        jobs.iter().any(|job| job.4)
+        jobs.iter().map(|job| job.4).max().unwrap_or(0)
     }
 
     /// Replaces the density solve's warm start by its SPH average over each particle's
