@@ -65,7 +65,8 @@ macro_rules! for_each_particle {
     }};
 }
 
-/// [`Parallel`] on Bevy's compute task pool (a single chunk runs inline).
+/// [`Parallel`] on Bevy's compute task pool: one contiguous group of items per thread, the calling
+/// thread taking the first.
 pub(crate) struct ComputePool;
 
 impl Parallel for ComputePool {
