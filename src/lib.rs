@@ -1,7 +1,8 @@
 //! # bevy_sph2d
 //!
-//! Bevy plugins for real-time 2D particle physics: a weakly compressible SPH fluid in SI units,
-//! stepped in `FixedUpdate` with `par_iter_mut` and an O(n) cell-list neighbour search.
+//! Bevy plugins for real-time 2D particle physics: an incompressible SPH fluid in SI units
+//! (divergence-free SPH by default, weakly compressible SPH on request), stepped in
+//! `FixedUpdate` with `par_iter_mut` and an O(n) cell-list neighbour search.
 //!
 //! ```no_run
 //! use bevy::prelude::*;
