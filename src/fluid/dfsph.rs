@@ -7,7 +7,7 @@
 //! 1. [`Dfsph::prepare`]: from the sorted snapshot, each particle's fluid neighbours with their
 //!    volume-weighted kernel gradients `gᵢⱼ = s V ∇Wᵢⱼ` (cached: every solver iteration reuses
 //!    them), the summed wall gradient, the density `ρ̂ᵢ = ρᵢ/ρ₀` by summation over fluid and
-//!    wall particles, and the DFSPH factor `αᵢ = 1/(|Σⱼ gᵢⱼ + g_wall,ᵢ|² + Σⱼ |gᵢⱼ|²)`.
+//!    wall particles, and the DFSPH factor `αᵢ = 1/(|Σⱼ gᵢⱼ + 2 g_wall,ᵢ|² + Σⱼ |gᵢⱼ|²)`.
 //! 2. [`Dfsph::solve_divergence`]: the stiffness `κᵛ` that cancels the density change rate
 //!    `Dρ̂ᵢ/Dt = Σⱼ gᵢⱼ·(vᵢ − vⱼ) + 2 g_wall,ᵢ·vᵢ` of the current velocities (walls mirror the
 //!    particle's velocity; particles with a deficient neighbourhood,
@@ -99,7 +99,7 @@ struct SlotState {
     count: u32,
     /// `ρ/ρ₀` by summation over fluid and wall particles.
     density: f32,
-    /// The DFSPH factor `1/(|Σⱼ gᵢⱼ + g_wall|² + Σⱼ |gᵢⱼ|²)`, m² (zero without neighbours): the
+    /// The DFSPH factor `1/(|Σⱼ gᵢⱼ + 2 g_wall|² + Σⱼ |gᵢⱼ|²)`, m² (zero without neighbours): the
     /// inverse of the diagonal of the pressure equations, per `dt²`.
     factor: f32,
     /// Whether the neighbourhood is deficient (see [`DEFICIENT_NEIGHBORHOOD`]).
