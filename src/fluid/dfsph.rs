@@ -51,6 +51,7 @@
 use super::kernels::RadialKernel;
 use super::layout::{FluidSnapshot, SlotVectors, Walls};
 use super::parallel::Parallel;
+use super::params::DfsphSettings;
 use super::solver::{SphConstants, with_kernels};
 use bevy::math::{Vec2, Vec4};
 
@@ -384,17 +385,7 @@ impl Dfsph {
         if self.is_empty() || dt <= 0.0 || settings.max_divergence_iterations == 0 {
             return 0;
         }
-        // The density change over one step of the current velocities, where the neighbourhood
-        // is full enough to carry pressure.
-        let (iterations, error) = self.solve(
-            dt,
-            Target::Divergence,
-            |rate, s| if s.deficient { None } else { Some(dt * rate) },
-            settings.divergence_tolerance,
-            1,
-            settings.max_divergence_iterations,
-            parallel,
-        );
+        let (iterations, error) = self.solve(dt, Target::Divergence, &settings, parallel);
         self.report.divergence_iterations = iterations;
         self.report.divergence_error = error;
         iterations
@@ -410,49 +401,31 @@ impl Dfsph {
         for (slot, v) in self.velocity.iter_mut().enumerate() {
             *v += dt * self.acceleration.get(slot);
         }
-        // The predicted density after the step, minus one.
-        let (iterations, error) = self.solve(
-            dt,
-            Target::Density,
-            |rate, s| Some(s.density + dt * rate - 1.0),
-            settings.density_tolerance,
-            2,
-            settings.max_density_iterations,
-            parallel,
-        );
+        let (iterations, error) = self.solve(dt, Target::Density, &settings, parallel);
         self.report.density_iterations = iterations;
         self.report.density_error = error;
         iterations
     }
 
-    /// Projected Jacobi on the DFSPH pressure equations of `target`: each iteration every
+    /// Projected, Chebyshev-accelerated Jacobi on the DFSPH pressure equations of `target`: each
+    /// iteration every
     /// particle asks for the stiffness change `Δκᵢ = eᵢ/(dt² αᵢ)` that would cancel its error
-    /// `eᵢ = error(Dρ̂ᵢ/Dt, state)` (the predicted density excess, or the density change of
+    /// `eᵢ` ([`Target::error`]: the predicted density excess, or the density change of
     /// one step) on its own, kept so that `κᵢ ≥ 0` (pressure pushes, never pulls), and the
     /// velocities take the pressure accelerations of the changes. Starts from the target's
     /// stiffness of the last sub-step (warm start) or zero, and stops once at least
     /// `min_iterations` are done and the mean error of the particles that can still change
-    /// is under `tolerance`. Returns the iterations and that mean error.
-    #[expect(
-        clippy::too_many_arguments,
-        reason = "the solve's settings, spelled out"
-    )]
+    /// is under `tolerance` ([`Target::limits`]). Returns the iterations and that mean error.
     fn solve(
         &mut self,
         dt: f32,
         target: Target,
-        error: impl Fn(f32, &SlotState) -> Option<f32> + Sync,
-        tolerance: f32,
-        min_iterations: u32,
-        max_iterations: u32,
+        settings: &DfsphSettings,
         parallel: &impl Parallel,
     ) -> (u32, f32) {
         let n = self.state.len();
-        let warm = match target {
-            Target::Density => 1.0,
-            // Bender & Koschier start the divergence solve from half the last stiffness.
-            Target::Divergence => 0.5,
-        };
+        let (tolerance, min_iterations, max_iterations) = target.limits(settings);
+        let warm = target.warm_start();
         let mut kappa = core::mem::take(match target {
             Target::Density => &mut self.kappa,
             Target::Divergence => &mut self.kappa_divergence,
@@ -489,7 +462,7 @@ impl Dfsph {
                     rate += neighbor.gradient.dot(vi - velocity[neighbor.slot as usize]);
                 }
                 let k = kappa_ref[slot];
-                let Some(e) = error(rate, &s) else {
+                let Some(e) = target.error(dt, rate, &s) else {
                     // Left alone: its stiffness returns to zero.
                     *d = -k;
                     return 0.0;
@@ -692,11 +665,53 @@ fn lattice_spectral_radius<G: RadialKernel>(g: &G, c: &SphConstants) -> f32 {
     largest
 }
 
-/// Which stiffness a solve updates.
+/// Which of the two pressure equations a solve works on.
 #[derive(Clone, Copy)]
 enum Target {
+    /// The constant-density solve: stiffness `κ`.
     Density,
+    /// The divergence-free solve: stiffness `κᵛ`.
     Divergence,
+}
+
+impl Target {
+    /// The error `eᵢ` a particle's stiffness should cancel, from its density change rate `rate`
+    /// (1/s) over a step of `dt`: the predicted density excess `ρ̂ᵢ + dt Dρ̂ᵢ/Dt − 1`, or the
+    /// density change of one step `dt Dρ̂ᵢ/Dt`; `None` leaves the particle at zero stiffness
+    /// (the divergence solve skips deficient neighbourhoods).
+    #[inline]
+    fn error(self, dt: f32, rate: f32, s: &SlotState) -> Option<f32> {
+        match self {
+            Self::Density => Some(s.density + dt * rate - 1.0),
+            Self::Divergence if s.deficient => None,
+            Self::Divergence => Some(dt * rate),
+        }
+    }
+
+    /// The tolerance on the mean error, and the fewest and most iterations.
+    fn limits(self, settings: &DfsphSettings) -> (f32, u32, u32) {
+        match self {
+            Self::Density => (
+                settings.density_tolerance,
+                2,
+                settings.max_density_iterations,
+            ),
+            Self::Divergence => (
+                settings.divergence_tolerance,
+                1,
+                settings.max_divergence_iterations,
+            ),
+        }
+    }
+
+    /// The fraction of the last sub-step's stiffness a solve starts from: all of it for the
+    /// density, half for the divergence, as Bender & Koschier do.
+    fn warm_start(self) -> f32 {
+        match self {
+            Self::Density => 1.0,
+            Self::Divergence => 0.5,
+        }
+    }
 }
 
 /// `Σⱼ (xᵢ + xⱼ) gᵢⱼ + 2 xᵢ g_wall,ᵢ`: the pressure acceleration of stiffness `x` on particle
