@@ -48,11 +48,12 @@
 //!
 //! See [`SphPlugin`](crate::fluid::SphPlugin).
 
+use super::clock::SubstepClock;
 use super::kernels::RadialKernel;
 use super::layout::{FluidSnapshot, SlotVectors, Walls};
 use super::parallel::Parallel;
 use super::params::DfsphSettings;
-use super::solver::{SphConstants, with_kernels};
+use super::solver::{SphConstants, max_length, with_kernels};
 use bevy::math::{Vec2, Vec4};
 
 /// Slots per parallel task, fixed (not from the thread count) so that sums over slots add up in
@@ -556,12 +557,7 @@ impl Dfsph {
     /// force limit `¼√(h/a)`, the viscous limit `⅛h²/ν` for the laminar viscosity plus the
     /// artificial one (`ν ≈ α c₀ h / 8` in 2D), and the settings' longest step.
     pub fn stable_time_step(&self, c: &SphConstants, max_acceleration: f32) -> f32 {
-        let max_speed = self
-            .velocity
-            .iter()
-            .fold(0.0f32, |m, v| m.max(v.length_squared()))
-            .sqrt();
-        stable_time_step(c, max_speed, max_acceleration)
+        stable_time_step(c, max_length(&self.velocity), max_acceleration)
     }
 
     /// Stores the acceleration (m/s²) of the particle at sorted `slot` for
@@ -595,6 +591,16 @@ impl Dfsph {
     #[inline]
     pub fn pressure(&self, c: &SphConstants, slot: usize) -> f32 {
         c.rest_density * self.kappa[slot]
+    }
+}
+
+/// The step the divergence solve makes the velocities divergence-free for: the last sub-step's
+/// length, or on the first sub-step the flow's limit at the current speed (both drivers use it).
+pub(crate) fn divergence_step(clock: &SubstepClock, c: &SphConstants, max_speed: f32) -> f32 {
+    if clock.dt > 0.0 {
+        clock.dt
+    } else {
+        stable_time_step(c, max_speed, 0.0)
     }
 }
 

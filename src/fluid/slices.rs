@@ -8,13 +8,13 @@
 
 use super::boundary::Obstacle;
 use super::clock::SubstepClock;
-use super::dfsph::Dfsph;
+use super::dfsph::{Dfsph, divergence_step};
 use super::layout::{FluidSnapshot, NeighborList, Walls};
 use super::parallel::Rayon;
 use super::params::PressureSolver;
 use super::solver::{
-    SphConstants, advance_particle, density_and_neighbors_at, mean_neighbors, move_particle,
-    with_kernels,
+    SphConstants, advance_particle, density_and_neighbors_at, max_length, mean_neighbors,
+    move_particle, with_kernels,
 };
 use super::wcsph::{acceleration_at, pressure_from_density, stable_time_step, wall_state_at};
 use bevy::math::Vec2;
@@ -254,22 +254,4 @@ impl SliceFluid {
             });
         dt
     }
-}
-
-/// The step the divergence solve makes the velocities divergence-free for: the last sub-step's
-/// length, or on the first sub-step the flow's limit at the current speed.
-pub(crate) fn divergence_step(clock: &SubstepClock, c: &SphConstants, max_speed: f32) -> f32 {
-    if clock.dt > 0.0 {
-        clock.dt
-    } else {
-        super::dfsph::stable_time_step(c, max_speed, 0.0)
-    }
-}
-
-/// The largest length among `vectors`.
-pub(crate) fn max_length(vectors: &[Vec2]) -> f32 {
-    vectors
-        .iter()
-        .fold(0.0f32, |m, a| m.max(a.length_squared()))
-        .sqrt()
 }

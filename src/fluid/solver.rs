@@ -235,3 +235,11 @@ pub fn move_particle(
         false
     }
 }
+
+/// The largest length among `vectors` (the fastest speed, the largest acceleration).
+pub(crate) fn max_length(vectors: &[Vec2]) -> f32 {
+    vectors
+        .iter()
+        .fold(0.0f32, |m, a| m.max(a.length_squared()))
+        .sqrt()
+}

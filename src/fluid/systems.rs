@@ -10,11 +10,11 @@ use super::components::{
     Velocity,
 };
 use super::dfsph::Dfsph;
+use super::dfsph::divergence_step;
 use super::layout::{FluidSnapshot, Walls};
 use super::parallel::Parallel;
 use super::parallel::Rayon;
 use super::params::{PressureSolver, SphParams, SphParamsError};
-use super::slices::divergence_step;
 use super::solver::{
     SphConstants, advance_particle, density_and_neighbors_at, move_particle, with_kernels,
 };
