@@ -3,7 +3,6 @@
 //! Spawning [`FluidParticle`] with a [`Position`] is enough: the marker requires the rest, and the
 //! solver fills in density, pressure and acceleration at the next step.
 
-use super::layout::NeighborList;
 use bevy::prelude::*;
 
 /// Marks an entity as an SPH fluid particle. Its required components carry the state the solver
@@ -26,8 +25,7 @@ use bevy::prelude::*;
     Density,
     Pressure,
     Stiffness,
-    NeighborSlot,
-    Neighbors
+    NeighborSlot
 )]
 pub struct FluidParticle;
 
@@ -86,8 +84,3 @@ impl Default for NeighborSlot {
         }
     }
 }
-
-/// The particle's fluid neighbours this sub-step (slots in the solver's snapshot), found while
-/// summing density and reused by the force pass. Solver scratch; games can ignore it.
-#[derive(Component, Debug, Clone, Copy, Default, Deref, DerefMut, PartialEq, Eq)]
-pub struct Neighbors(pub NeighborList);

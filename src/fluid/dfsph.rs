@@ -43,7 +43,7 @@
 //! lattice correction [`SphConstants::gradient_scale`], which makes the discrete gradient of a
 //! linear field exact at rest, so hydrostatic pressure rises at `ρ₀g`.
 //!
-//! Sums over particles are taken in f64 chunk by chunk of fixed size ([`CHUNK`]), so the
+//! Sums over particles are taken in f64 chunk by chunk of fixed size ([`CHUNK`](super::parallel::CHUNK)), so the
 //! iteration count, and with it every result, is the same on any number of threads.
 //!
 //! See [`SphPlugin`](crate::fluid::SphPlugin).
@@ -51,20 +51,10 @@
 use super::clock::SubstepClock;
 use super::kernels::RadialKernel;
 use super::layout::{FluidSnapshot, SlotVectors, Walls};
-use super::parallel::Parallel;
+use super::parallel::{CHUNK, Parallel, for_each_slot, run_jobs};
 use super::params::DfsphSettings;
 use super::solver::{SphConstants, max_length, with_kernels};
 use bevy::math::{Vec2, Vec4};
-
-/// Slots per parallel task, fixed (not from the thread count) so that sums over slots add up in
-/// the same order on any number of threads. Measured with the `bench` example, the demo's dam
-/// break at 2,500 particles on two threads: 1.37x real time with 256, 1.22x with 512.
-pub const CHUNK: usize = 256;
-
-/// Fewest particles whose passes run in parallel. Worth it only on a pool whose threads stay
-/// awake between passes (the ECS runs each solve as one rayon region for that): at 2,500
-/// particles a pass is tens of microseconds, less than waking a sleeping thread.
-pub const PARALLEL_SLOTS: usize = 1024;
 
 /// The spectral radius the Chebyshev acceleration of the Jacobi iterations assumes (Golub &
 /// Varga 1961; Wang 2015 for projected iterations): the convergence factor of the smoothest
@@ -328,6 +318,17 @@ impl Dfsph {
                         }
                     });
                     *most = (*most).max(len);
+                    // The row is padded to whole quads (see `quads`) with the particle itself at
+                    // zero gradient and weight, which adds nothing to any sum over it.
+                    if len <= stride {
+                        for pad in len..len.next_multiple_of(4) {
+                            row[pad] = Neighbor {
+                                slot: (*start + k) as u32,
+                                gradient: Vec2::ZERO,
+                            };
+                            row_weights[pad] = 0.0;
+                        }
+                    }
                     // A particle's own stiffness changes its density rate through its own velocity
                     // (pushed by its neighbours and the mirrored wall) and its neighbours'.
                     let diagonal = (sum + WALL_MIRROR * wall_gradient).length_squared() + sum_sq;
@@ -457,11 +458,14 @@ impl Dfsph {
                     return 0.0;
                 }
                 let vi = velocity[slot];
-                let row = &rows[slot * stride..slot * stride + s.count as usize];
-                let mut rate = WALL_MIRROR * s.wall_gradient.dot(vi);
-                for neighbor in row {
-                    rate += neighbor.gradient.dot(vi - velocity[neighbor.slot as usize]);
+                // Four sums side by side: one would wait on each addition in turn.
+                let mut sums = Vec4::ZERO;
+                for quad in quads(rows, stride, slot, s.count) {
+                    sums += Vec4::from_array(
+                        quad.map(|n| n.gradient.dot(vi - velocity[n.slot as usize])),
+                    );
                 }
+                let rate = WALL_MIRROR * s.wall_gradient.dot(vi) + sum_quad(sums);
                 let k = kappa_ref[slot];
                 let Some(e) = target.error(dt, rate, &s) else {
                     // Left alone: its stiffness returns to zero.
@@ -470,9 +474,12 @@ impl Dfsph {
                 };
                 // The Jacobi update, accelerated by Chebyshev's recurrence (the last change
                 // times `ω − 1` added), projected so that the stiffness stays non-negative.
-                let jacobi = relaxation * e * s.factor * inv_dt_sq;
+                let scale = relaxation * s.factor * inv_dt_sq;
+                let jacobi = scale * e;
                 *d = (omega * jacobi + (omega - 1.0) * last).max(-k);
-                (jacobi.max(-k) / (relaxation * s.factor * inv_dt_sq)).abs() as f64
+                // The error the projected change leaves a chance to cancel: all of it, or as
+                // much as the stiffness can still give (a division only in that rarer case).
+                (if jacobi >= -k { e.abs() } else { k / scale }) as f64
             });
             mean_error = (sum / n as f64) as f32;
             omega = if iterations == 0 {
@@ -725,50 +732,30 @@ impl Target {
 #[inline]
 fn pressure_push(rows: &[Neighbor], stride: usize, s: SlotState, slot: usize, x: &[f32]) -> Vec2 {
     let own = x[slot];
-    let row = &rows[slot * stride..slot * stride + s.count as usize];
-    let mut push = WALL_MIRROR * own * s.wall_gradient;
-    for neighbor in row {
-        push += (own + x[neighbor.slot as usize]) * neighbor.gradient;
+    let (mut sum_x, mut sum_y) = (Vec4::ZERO, Vec4::ZERO);
+    for quad in quads(rows, stride, slot, s.count) {
+        let weight = Vec4::from_array(quad.map(|n| own + x[n.slot as usize]));
+        sum_x += weight * Vec4::from_array(quad.map(|n| n.gradient.x));
+        sum_y += weight * Vec4::from_array(quad.map(|n| n.gradient.y));
     }
-    push
+    WALL_MIRROR * own * s.wall_gradient + Vec2::new(sum_quad(sum_x), sum_quad(sum_y))
 }
 
-/// Runs the jobs of a pass over `slots` particles: on `parallel` from [`PARALLEL_SLOTS`] on, on
-/// the calling thread below (waking a pool's threads costs more than a small pass). The jobs are
-/// the same either way, so are the sums.
-fn run_jobs<T: Send>(
-    parallel: &impl Parallel,
-    slots: usize,
-    jobs: &mut [T],
-    work: impl Fn(&mut T) + Sync,
-) {
-    if slots < PARALLEL_SLOTS {
-        jobs.iter_mut().for_each(work);
-    } else {
-        parallel.for_each(jobs, work);
-    }
+/// The cached row of `slot` with `count` neighbours, as quads: [`Dfsph::prepare`] pads each
+/// row to a multiple of four with entries that add nothing (the particle itself, at zero
+/// gradient), so the iterations sum four neighbours at a time.
+#[inline]
+fn quads(rows: &[Neighbor], stride: usize, slot: usize, count: u32) -> &[[Neighbor; 4]] {
+    let start = slot * stride;
+    rows[start..start + (count as usize).next_multiple_of(4)]
+        .as_chunks::<4>()
+        .0
 }
 
-/// Runs `work(slot, &mut out[slot])` for every slot, in parallel chunks of [`CHUNK`] slots, and
-/// returns the sum of what it returns, added chunk by chunk in slot order: the same on any
-/// number of threads.
-fn for_each_slot<T: Send>(
-    out: &mut [T],
-    parallel: &impl Parallel,
-    work: impl Fn(usize, &mut T) -> f64 + Sync,
-) -> f64 {
-    let n = out.len();
-    let mut jobs: Vec<_> = out
-        .chunks_mut(CHUNK)
-        .enumerate()
-        .map(|(k, values)| (k * CHUNK, values, 0.0f64))
-        .collect();
-    run_jobs(parallel, n, &mut jobs, |(start, values, sum)| {
-        for (k, value) in values.iter_mut().enumerate() {
-            *sum += work(*start + k, value);
-        }
-    });
-    jobs.iter().map(|job| job.2).sum()
+/// The sum of a quad's lanes, in a fixed order.
+#[inline]
+fn sum_quad(v: Vec4) -> f32 {
+    (v.x + v.y) + (v.z + v.w)
 }
 
 #[cfg(test)]

@@ -26,8 +26,7 @@ use crate::control::{SimulationControlPlugin, SimulationControlSystems, simulati
 pub use boundary::{Obstacle, Tank};
 pub use clock::SubstepClock;
 pub use components::{
-    Acceleration, Density, FluidParticle, NeighborSlot, Neighbors, Position, Pressure, Stiffness,
-    Velocity,
+    Acceleration, Density, FluidParticle, NeighborSlot, Position, Pressure, Stiffness, Velocity,
 };
 pub use kernels::KernelKind;
 pub use params::{DfsphSettings, PressureSolver, SphParams, SphParamsError};
@@ -51,12 +50,12 @@ pub use systems::{SphParamsStatus, SphSolver, SphStats, refresh_fluid_state};
 ///    [`SimulationControl`](crate::control::SimulationControl) pauses): split the tick into stable sub-steps and run the [`SphSubstep`]
 ///    schedule once per sub-step. In it, in order ([`SphSubstepSystems`]):
 ///    1. [`SphSubstepSystems::Neighbors`]: rebuild the cell grid and the sorted snapshot.
-///    2. [`SphSubstepSystems::Density`]: WCSPH: density and pressure (`par_iter_mut`), wall
-///       pressure. DFSPH: neighbour lists with cached kernel gradients, densities and factors,
-///       then the divergence-free solve.
-///    3. [`SphSubstepSystems::Forces`]: into [`Acceleration`] (`par_iter_mut`; this overwrites
-///       the previous sub-step's value): WCSPH: pressure, viscosity and gravity. DFSPH:
-///       viscosity and gravity, the pressure following in `Integrate`.
+///    2. [`SphSubstepSystems::Density`]: WCSPH: density and pressure with each particle's
+///       neighbour list, wall pressure. DFSPH: neighbour lists with cached kernel gradients,
+///       densities and factors, then the divergence-free solve.
+///    3. [`SphSubstepSystems::Forces`]: into [`Acceleration`] (this overwrites the previous
+///       sub-step's value), with [`Density`] and [`Pressure`]: WCSPH: pressure, viscosity and
+///       gravity. DFSPH: viscosity and gravity, the pressure following in `Integrate`.
 ///    4. [`SphSubstepSystems::ExternalForces`]: empty, for your own forces: add to
 ///       [`Acceleration`] with `+=`, e.g.
 ///       `app.add_systems(SphSubstep, wind.in_set(SphSubstepSystems::ExternalForces))`.
@@ -65,8 +64,11 @@ pub use systems::{SphParamsStatus, SphSolver, SphStats, refresh_fluid_state};
 ///       (`par_iter_mut`), keep particles in the tank and out of obstacles.
 /// 3. [`SphSystems::Finish`]: fill [`SphStats`].
 ///
-/// Parallel iteration uses Bevy's `ComputeTaskPool`. On machines with few cores Bevy's default
-/// pool sizes leave one compute thread; set `TaskPoolPlugin`'s options to use them all.
+/// The passes over neighbours run by sorted slot in parallel regions on a rayon pool of as many
+/// threads as Bevy's `ComputeTaskPool` (whose threads would sleep between passes); the grid and
+/// the passes over components use the `ComputeTaskPool` itself. On machines with few cores
+/// Bevy's default pool sizes leave one compute thread; set `TaskPoolPlugin`'s options to use
+/// them all.
 pub struct SphPlugin {
     /// The schedule the fluid steps in.
     pub schedule: Interned<dyn ScheduleLabel>,
@@ -189,9 +191,7 @@ impl Plugin for SphPlugin {
             substep.add_systems((
                 systems::build_neighbor_grid.in_set(SphSubstepSystems::Neighbors),
                 (
-                    (systems::compute_density, systems::compute_wall_pressure)
-                        .chain()
-                        .run_if(wcsph.clone()),
+                    systems::compute_density.run_if(wcsph.clone()),
                     (systems::prepare_dfsph, systems::solve_divergence)
                         .chain()
                         .run_if(dfsph.clone()),

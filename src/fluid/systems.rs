@@ -6,14 +6,12 @@ use super::SphSubstep;
 use super::boundary::Obstacle;
 use super::clock::SubstepClock;
 use super::components::{
-    Acceleration, Density, FluidParticle, NeighborSlot, Neighbors, Position, Pressure, Stiffness,
-    Velocity,
+    Acceleration, Density, FluidParticle, NeighborSlot, Position, Pressure, Stiffness, Velocity,
 };
 use super::dfsph::Dfsph;
 use super::dfsph::divergence_step;
-use super::layout::{FluidSnapshot, Walls};
-use super::parallel::Parallel;
-use super::parallel::Rayon;
+use super::layout::{FluidSnapshot, NeighborList, Walls};
+use super::parallel::{PARALLEL_SLOTS, Parallel, Rayon, Sequential, for_each_slot};
 use super::params::{PressureSolver, SphParams, SphParamsError};
 use super::solver::{
     SphConstants, advance_particle, density_and_neighbors_at, move_particle, with_kernels,
@@ -23,7 +21,7 @@ use bevy::ecs::batching::BatchingStrategy;
 use bevy::ecs::query::QueryItem;
 use bevy::platform::time::Instant;
 use bevy::prelude::*;
-use bevy::tasks::{ComputeTaskPool, ParallelSliceMut};
+use bevy::tasks::ComputeTaskPool;
 use core::sync::atomic::{AtomicU32, Ordering};
 
 /// Smallest amount of per-particle work worth a task of its own: below it, waking a thread
@@ -39,22 +37,17 @@ const BATCHING: BatchingStrategy = BatchingStrategy {
     batches_per_thread: 1,
 };
 
-/// Below this many particles the per-particle passes over neighbours (WCSPH's density and
-/// forces) run on the calling thread: a pass is then shorter than waking a thread (measured with
-/// the `bench` example).
-pub const MIN_PARALLEL_PARTICLES: usize = 1024;
-
-/// The same for passes without neighbour loops (integration, copying solver results into the
-/// components): at the demo's 2,500 particles running them in parallel made the DFSPH dam break
-/// 8% slower.
+/// Fewest particles whose passes over components (copying solver results into them,
+/// integration) run in parallel on Bevy's pool: these passes are light, and at the demo's 2,500
+/// particles running them in parallel made the DFSPH dam break 8% slower.
 pub const MIN_PARALLEL_LIGHT_PARTICLES: usize = 8192;
 
-/// Runs `$work` over `$query`'s items, in parallel batches from `$min` particles (`$n`) on, on
-/// the calling thread below.
+/// Runs `$work` over `$query`'s items, in parallel batches from
+/// [`MIN_PARALLEL_LIGHT_PARTICLES`] particles (`$n`) on, on the calling thread below.
 macro_rules! for_each_particle {
-    ($query:expr, $n:expr, $min:expr, $data:ty, $work:expr) => {{
+    ($query:expr, $n:expr, $data:ty, $work:expr) => {{
         let work = |item: QueryItem<'_, '_, $data>| ($work)(item);
-        if $n < $min {
+        if $n < MIN_PARALLEL_LIGHT_PARTICLES {
             $query.iter_mut().for_each(work);
         } else {
             $query
@@ -63,40 +56,6 @@ macro_rules! for_each_particle {
                 .for_each(work);
         }
     }};
-}
-
-/// [`Parallel`] on Bevy's compute task pool: one contiguous group of items per thread, the calling
-/// thread taking the first.
-pub(crate) struct ComputePool;
-
-impl Parallel for ComputePool {
-    fn for_each<T: Send, F: Fn(&mut T) + Sync>(&self, items: &mut [T], work: F) {
-        if items.len() <= 1 {
-            items.iter_mut().for_each(work);
-            return;
-        }
-        // One contiguous run of items per thread, the calling thread taking the first: a task
-        // per item cost more in spawning than a small item's work, and a caller that only waits
-        // puts two threads to sleep and wakes them on every pass (measured: a DFSPH sub-step of
-        // 20,000 particles took 27 ms on two threads with a task per item, 17 ms on rayon).
-        let pool = ComputeTaskPool::get();
-        let per_task = items.len().div_ceil(pool.thread_num().max(1));
-        let work = &work;
-        let mut groups = items.chunks_mut(per_task);
-        let first = groups.next();
-        pool.scope(|scope| {
-            for group in groups {
-                scope.spawn(async move { group.iter_mut().for_each(work) });
-            }
-            if let Some(group) = first {
-                group.iter_mut().for_each(work);
-            }
-        });
-    }
-
-    fn threads(&self) -> usize {
-        ComputeTaskPool::get().thread_num().max(1)
-    }
 }
 
 /// The solver's working state: derived constants, the neighbour snapshot, the wall particles
@@ -111,6 +70,10 @@ pub struct SphSolver {
     gathered_position: Vec<Vec2>,
     gathered_velocity: Vec<Vec2>,
     gathered_stiffness: Vec<Vec2>,
+    /// WCSPH: each particle's fluid neighbours by sorted slot, from the density pass.
+    neighbor_lists: Vec<NeighborList>,
+    /// WCSPH: accelerations by sorted slot, from the force pass.
+    accelerations: Vec<Vec2>,
     clock: SubstepClock,
     iterations: SolverIterations,
     /// Counts snapshot rebuilds; [`NeighborSlot`]s carry the one they were assigned in.
@@ -139,6 +102,8 @@ impl SphSolver {
             gathered_position: Vec::new(),
             gathered_velocity: Vec::new(),
             gathered_stiffness: Vec::new(),
+            neighbor_lists: Vec::new(),
+            accelerations: Vec::new(),
             clock: SubstepClock::default(),
             iterations: SolverIterations::default(),
             generation: 0,
@@ -181,6 +146,12 @@ impl SphSolver {
     fn dfsph_slot(&self, slot: &NeighborSlot) -> Option<usize> {
         let index = slot.slot as usize;
         (slot.generation == self.generation && index < self.dfsph.len()).then_some(index)
+    }
+
+    /// The particle's slot in this sub-step's snapshot, if it was in it.
+    fn snapshot_slot(&self, slot: &NeighborSlot) -> Option<usize> {
+        let index = slot.slot as usize;
+        (slot.generation == self.generation && index < self.snapshot.len()).then_some(index)
     }
 
     /// Starts simulated time again from zero (after a reset).
@@ -333,7 +304,6 @@ pub fn refresh_fluid_state(world: &mut World) {
     match world.resource::<SphSolver>().constants.solver {
         PressureSolver::Wcsph => results.extend([
             world.run_system_cached(compute_density),
-            world.run_system_cached(compute_wall_pressure),
             world.run_system_cached(compute_forces),
         ]),
         PressureSolver::Dfsph => results.extend([
@@ -408,12 +378,11 @@ pub(crate) fn build_neighbor_grid(
             }
         }
     }
-    solver.snapshot.rebuild(
-        &solver.constants,
-        &solver.gathered_position,
-        &solver.gathered_velocity,
-        &ComputePool,
-    );
+    let (snapshot, c) = (&mut solver.snapshot, &solver.constants);
+    let (positions, velocities) = (&solver.gathered_position, &solver.gathered_velocity);
+    slot_region(positions.len(), |passes| {
+        snapshot.rebuild(c, positions, velocities, &passes);
+    });
     // Same query, same system, no structural change in between: the same order as above.
     // Generation 0 marks particles that never had a slot.
     solver.generation = solver.generation.wrapping_add(1).max(1);
@@ -443,130 +412,100 @@ pub(crate) fn build_neighbor_grid(
     }
 }
 
-/// What the density pass reads and writes per particle.
-type DensityData = (
-    &'static Position,
-    &'static NeighborSlot,
-    &'static mut Density,
-    &'static mut Pressure,
-    &'static mut Neighbors,
-);
-
-/// [`SphSubstepSystems::Density`](super::SphSubstepSystems::Density): summed density and the
-/// equation of state, per particle in parallel; each particle also stores its density and
-/// pressure at its slot of the snapshot, for its neighbours' force pass.
-pub(crate) fn compute_density(
-    solver: Res<SphSolver>,
-    mut particles: Query<DensityData, With<FluidParticle>>,
-) {
-    let solver = &*solver;
-    let c = solver.constants;
-    let n = solver.snapshot.len();
-    with_kernels!(c.kernel, c.support, |w, _g| {
-        for_each_particle!(
-            particles,
-            n,
-            MIN_PARALLEL_PARTICLES,
-            DensityData,
-            |(position, slot, mut density, mut pressure, mut neighbors): QueryItem<
-                '_,
-                '_,
-                DensityData,
-            >| {
-                let rho = density_and_neighbors_at(
-                    &w,
-                    &c,
-                    position.0,
-                    &solver.snapshot,
-                    &solver.walls,
-                    &mut neighbors.0,
-                );
-                let p = pressure_from_density(&c, rho);
-                density.0 = rho;
-                pressure.0 = p;
-                // A particle spawned since the snapshot was built has no slot in it.
-                if slot.generation == solver.generation {
-                    solver.snapshot.set_pressure(slot.slot as usize, rho, p);
-                }
-            }
-        );
-    });
-}
-
-/// Extrapolates the fluid's pressure onto the wall particles, in parallel chunks.
-pub(crate) fn compute_wall_pressure(mut solver: ResMut<SphSolver>) {
+/// [`SphSubstepSystems::Density`](super::SphSubstepSystems::Density) for WCSPH: summed density
+/// and the equation of state by sorted slot, stored in the snapshot for the force pass (with
+/// each particle's fluid neighbours, which the force pass reuses), then the wall particles'
+/// pressure extrapolated from the fluid; one parallel region (see [`solver_region`]).
+pub(crate) fn compute_density(mut solver: ResMut<SphSolver>) {
     let solver = &mut *solver;
     let c = solver.constants;
-    let fluid = &solver.snapshot;
-    if solver.walls.is_empty() {
-        return;
-    }
-    let pool = ComputeTaskPool::get();
-    // Chunks big enough that spawning them costs less than the work in them.
-    let chunk = solver
-        .walls
-        .len()
-        .div_ceil(4 * pool.thread_num().max(1))
-        .max(MIN_PARALLEL_CHUNK);
+    let n = solver.snapshot.len();
+    solver.neighbor_lists.resize(n, NeighborList::default());
+    let (snapshot, walls, lists) = (
+        &solver.snapshot,
+        &mut solver.walls,
+        &mut solver.neighbor_lists,
+    );
     with_kernels!(c.kernel, c.support, |w, _g| {
-        solver.walls.update_pressure(|mut states, points| {
-            let update = |index: usize, states: &mut [_]| {
-                for (k, state) in states.iter_mut().enumerate() {
-                    *state = wall_state_at(&w, &c, points.get(index * chunk + k), fluid);
-                }
-            };
-            if states.len() <= chunk {
-                update(0, states);
-            } else {
-                states.par_chunk_map_mut(pool, chunk, update);
-            }
+        slot_region(n, |passes| {
+            let walls_ref = &*walls;
+            for_each_slot(lists, &passes, |slot, list| {
+                let x = snapshot.points.get(slot);
+                let rho = density_and_neighbors_at(&w, &c, x, snapshot, walls_ref, list);
+                snapshot.set_pressure(slot, rho, pressure_from_density(&c, rho));
+                0.0
+            });
+            walls.update_pressure(|states, points| {
+                for_each_slot(states, &passes, |slot, state| {
+                    *state = wall_state_at(&w, &c, points.get(slot), snapshot);
+                    0.0
+                });
+            });
         });
     });
 }
 
-/// What the force pass reads and writes per particle.
+/// What the WCSPH force pass writes per particle.
 type ForceData = (
-    &'static Position,
-    &'static Velocity,
-    &'static Density,
-    &'static Pressure,
-    &'static Neighbors,
+    &'static NeighborSlot,
+    &'static mut Density,
+    &'static mut Pressure,
     &'static mut Acceleration,
 );
 
-/// [`SphSubstepSystems::Forces`](super::SphSubstepSystems::Forces): pressure, viscosity and
-/// gravity, per particle in parallel. Overwrites [`Acceleration`]; add your own forces after it.
+/// [`SphSubstepSystems::Forces`](super::SphSubstepSystems::Forces) for WCSPH: pressure,
+/// viscosity and gravity by sorted slot in one parallel region, then each particle's
+/// [`Density`], [`Pressure`] and [`Acceleration`] (overwritten; add your own forces after it).
 pub(crate) fn compute_forces(
-    solver: Res<SphSolver>,
+    mut solver: ResMut<SphSolver>,
     mut particles: Query<ForceData, With<FluidParticle>>,
 ) {
-    let solver = &*solver;
+    let solver = &mut *solver;
     let c = solver.constants;
     let n = solver.snapshot.len();
+    solver.accelerations.resize(n, Vec2::ZERO);
+    let (snapshot, walls, lists) = (&solver.snapshot, &solver.walls, &solver.neighbor_lists);
+    let accelerations = &mut solver.accelerations;
     with_kernels!(c.kernel, c.support, |_w, g| {
-        for_each_particle!(
-            particles,
-            n,
-            MIN_PARALLEL_PARTICLES,
-            ForceData,
-            |(position, velocity, density, pressure, neighbors, mut acceleration): QueryItem<
-                '_,
-                '_,
-                ForceData,
-            >| {
-                acceleration.0 = acceleration_at(
+        slot_region(n, |passes| {
+            for_each_slot(accelerations, &passes, |slot, a| {
+                let [x, y, vx, vy] = snapshot.kinematics[slot];
+                let rho = snapshot.pressure.get(slot).0;
+                let p = pressure_from_density(&c, rho);
+                *a = acceleration_at(
                     &g,
                     &c,
-                    position.0,
-                    velocity.0,
-                    density.0,
-                    pressure.0,
-                    &neighbors.0,
-                    &solver.snapshot,
-                    &solver.walls,
+                    Vec2::new(x, y),
+                    Vec2::new(vx, vy),
+                    rho,
+                    p,
+                    &lists[slot],
+                    snapshot,
+                    walls,
                 );
-            }
-        );
+                0.0
+            });
+        });
+    });
+    let solver = &*solver;
+    for_each_particle!(particles, n, ForceData, |(
+        slot,
+        mut density,
+        mut pressure,
+        mut acceleration,
+    ): QueryItem<
+        '_,
+        '_,
+        ForceData,
+    >| {
+        if let Some(slot) = solver.snapshot_slot(slot) {
+            let rho = solver.snapshot.pressure.get(slot).0;
+            density.0 = rho;
+            pressure.0 = pressure_from_density(&c, rho);
+            acceleration.0 = solver.accelerations[slot];
+        } else {
+            acceleration.0 = c.gravity;
+        }
     });
 }
 
@@ -614,7 +553,6 @@ pub(crate) fn integrate_particles(
         for_each_particle!(
             particles,
             solver.snapshot.len(),
-            MIN_PARALLEL_LIGHT_PARTICLES,
             MoveData,
             |(mut position, mut velocity, acceleration): QueryItem<'_, '_, MoveData>| {
                 if !advance_particle(
@@ -640,13 +578,13 @@ pub(crate) fn prepare_dfsph(mut solver: ResMut<SphSolver>) {
     let c = solver.constants;
     let (order, stiffness) = (solver.snapshot.grid().order(), &solver.gathered_stiffness);
     let (dfsph, snapshot, walls) = (&mut solver.dfsph, &solver.snapshot, &solver.walls);
-    solver_region(|| {
+    slot_region(snapshot.len(), |passes| {
         dfsph.prepare(
             &c,
             snapshot,
             walls,
             |slot| stiffness[order[slot] as usize],
-            &Rayon,
+            &passes,
         )
     });
 }
@@ -669,6 +607,41 @@ fn solver_region<R: Send>(work: impl FnOnce() -> R + Send) -> R {
     .install(work)
 }
 
+/// Where a step's slot passes run (a [`Parallel`]): in a [`solver_region`], or on the calling
+/// thread.
+#[derive(Debug, Clone, Copy)]
+enum Passes {
+    Region,
+    Here,
+}
+
+impl Parallel for Passes {
+    fn for_each<T: Send, F: Fn(&mut T) + Sync>(&self, items: &mut [T], work: F) {
+        match self {
+            Self::Region => Rayon.for_each(items, work),
+            Self::Here => Sequential.for_each(items, work),
+        }
+    }
+
+    fn threads(&self) -> usize {
+        match self {
+            Self::Region => Rayon.threads(),
+            Self::Here => 1,
+        }
+    }
+}
+
+/// Runs `work`, a step of slot passes over `n` particles, in a [`solver_region`] from
+/// [`PARALLEL_SLOTS`] particles on with more than one compute thread, on the calling thread
+/// otherwise (where handing the step to another thread costs and gains nothing).
+fn slot_region<R: Send>(n: usize, work: impl FnOnce(Passes) -> R + Send) -> R {
+    if n < PARALLEL_SLOTS || ComputeTaskPool::get().thread_num() <= 1 {
+        work(Passes::Here)
+    } else {
+        solver_region(|| work(Passes::Region))
+    }
+}
+
 /// [`SphSubstepSystems::Density`](super::SphSubstepSystems::Density) for DFSPH, after
 /// [`prepare_dfsph`]: makes the velocity field divergence-free.
 pub(crate) fn solve_divergence(mut solver: ResMut<SphSolver>) {
@@ -676,7 +649,9 @@ pub(crate) fn solve_divergence(mut solver: ResMut<SphSolver>) {
     let c = solver.constants;
     let dt = divergence_step(&solver.clock, &c, solver.snapshot.max_speed);
     let dfsph = &mut solver.dfsph;
-    let iterations = solver_region(|| dfsph.solve_divergence(&c, dt, &Rayon));
+    let iterations = slot_region(dfsph.len(), |passes| {
+        dfsph.solve_divergence(&c, dt, &passes)
+    });
     solver.iterations.divergence += iterations;
     solver.iterations.total += iterations as u64;
 }
@@ -702,7 +677,6 @@ pub(crate) fn compute_dfsph_forces(
     for_each_particle!(
         particles,
         snapshot.len(),
-        MIN_PARALLEL_LIGHT_PARTICLES,
         DfsphForceData,
         |(slot, mut velocity, mut density, mut acceleration): QueryItem<'_, '_, DfsphForceData>| {
             if let Some(slot) = solver.dfsph_slot(slot) {
@@ -739,7 +713,7 @@ pub(crate) fn solve_density(
         .clock
         .take_substep(stable, c.max_substeps, solver.snapshot.is_empty());
     let dfsph = &mut solver.dfsph;
-    let iterations = solver_region(|| dfsph.solve_density(&c, dt, &Rayon));
+    let iterations = slot_region(dfsph.len(), |passes| dfsph.solve_density(&c, dt, &passes));
     solver.iterations.density += iterations;
     solver.iterations.total += iterations as u64;
 }
@@ -770,7 +744,6 @@ pub(crate) fn integrate_dfsph(
         for_each_particle!(
             particles,
             solver.snapshot.len(),
-            MIN_PARALLEL_LIGHT_PARTICLES,
             DfsphMoveData,
             |(slot, mut position, mut velocity, mut pressure, mut stiffness, acceleration): QueryItem<
                 '_,
