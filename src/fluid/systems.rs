@@ -72,7 +72,7 @@ pub struct SphSolver {
     gathered_stiffness: Vec<Vec2>,
     /// WCSPH: each particle's fluid neighbours by sorted slot, from the density pass.
     neighbor_lists: Vec<NeighborList>,
-    /// WCSPH: accelerations by sorted slot, from the force pass.
+    /// Accelerations by sorted slot from the force pass (DFSPH: without pressure).
     accelerations: Vec<Vec2>,
     clock: SubstepClock,
     iterations: SolverIterations,
@@ -668,21 +668,32 @@ type DfsphForceData = (
 /// divergence-free velocity and the density, and sets [`Acceleration`] to gravity and viscosity
 /// (pressure comes from the density solve in `Integrate`, after your external forces).
 pub(crate) fn compute_dfsph_forces(
-    solver: Res<SphSolver>,
+    mut solver: ResMut<SphSolver>,
     mut particles: Query<DfsphForceData, With<FluidParticle>>,
 ) {
-    let solver = &*solver;
+    let solver = &mut *solver;
     let c = solver.constants;
+    let n = solver.dfsph.len();
+    solver.accelerations.resize(n, Vec2::ZERO);
     let (dfsph, snapshot) = (&solver.dfsph, &solver.snapshot);
+    let accelerations = &mut solver.accelerations;
+    slot_region(n, |passes| {
+        for_each_slot(accelerations, &passes, |slot, a| {
+            *a = dfsph.non_pressure_acceleration(&c, snapshot, slot);
+            0.0
+        });
+    });
+    let solver = &*solver;
+    let dfsph = &solver.dfsph;
     for_each_particle!(
         particles,
-        snapshot.len(),
+        n,
         DfsphForceData,
         |(slot, mut velocity, mut density, mut acceleration): QueryItem<'_, '_, DfsphForceData>| {
             if let Some(slot) = solver.dfsph_slot(slot) {
                 velocity.0 = dfsph.velocity(slot);
                 density.0 = dfsph.density(&c, slot);
-                acceleration.0 = dfsph.non_pressure_acceleration(&c, snapshot, slot);
+                acceleration.0 = solver.accelerations[slot];
             } else {
                 acceleration.0 = c.gravity;
             }

@@ -4,13 +4,18 @@
 use crate::fluid::SphParams;
 use bevy::camera::ScalingMode;
 use bevy::prelude::*;
+use bevy::core_pipeline::tonemapping::DebandDither;
+use bevy::render::view::Msaa;
 use bevy::window::PrimaryWindow;
 
 /// A 2D camera that the render plugin keeps fitted to the tank (with a margin): the tank fills
 /// the window area left free by [`ViewInsets`], whatever the window's size.
+///
+/// It renders without multisampling: particles are soft-edged textures, which MSAA does not
+/// smooth, and a software renderer (Mesa's lavapipe) pays for every sample.
 #[derive(Component, Reflect, Debug, Clone, Copy, PartialEq)]
 #[reflect(Component, Debug)]
-#[require(Camera2d)]
+#[require(Camera2d, Msaa = Msaa::Off, DebandDither = DebandDither::Disabled)]
 pub struct SphCamera {
     /// Space kept around the tank, as a fraction of its larger side.
     pub margin: f32,
