@@ -2,7 +2,8 @@
 //! tweak panel on the left.
 //!
 //! Left mouse button: the tool picked in the panel (pull by default); right button: push; wheel:
-//! tool radius. Space pauses, `.` steps, `R` resets, ←/→ tilt the tank, `Tab` hides the panel.
+//! tool radius. Space pauses, `.` steps, `R` resets, `L` switches between the liquid and the
+//! particles, ←/→ tilt the tank, `Tab` hides the panel.
 //!
 //! `cargo run --example dam_break [-- PARTICLES]` (the dev profile is optimised)
 

@@ -3,12 +3,13 @@
 
 use crate::control::ResetSimulation;
 use crate::fluid::{ScenarioKind, SphParams, SphPlugin, SphScenario};
-use crate::render::SphCamera;
+use crate::render::{ParticleDraw, ParticleView, RenderMode, SphCamera};
 use crate::{ParticlePlugins, ParticleUiPlugins};
 use bevy::prelude::*;
 
 /// Everything the demo needs on top of `DefaultPlugins`: [`ParticlePlugins`] with
-/// [`demo_params`], [`ParticleUiPlugins`], a [`SphCamera`], and the scenario spawned at start.
+/// [`demo_params`], [`ParticleUiPlugins`] drawing the liquid ([`ParticleDraw::Liquid`]; `L`
+/// switches to the particles), a [`SphCamera`], and the scenario spawned at start.
 #[derive(Debug, Clone)]
 pub struct SphDemoPlugin {
     /// The scenario spawned at start and on every reset.
@@ -56,6 +57,11 @@ impl Plugin for SphDemoPlugin {
             ParticleUiPlugins,
         ))
         .insert_resource(ClearColor(Color::srgb(0.04, 0.05, 0.07)))
+        .insert_resource(ParticleView {
+            draw: ParticleDraw::Liquid,
+            mode: RenderMode::Solid,
+            ..default()
+        })
         .insert_resource(self.scenario)
         .add_systems(Startup, (start_demo, limit_catch_up));
     }

@@ -140,5 +140,7 @@ pub mod prelude {
     #[cfg(feature = "egui")]
     pub use crate::panel::SphPanelPlugin;
     #[cfg(feature = "render")]
-    pub use crate::render::{ColorMap, ParticleView, RenderMode, SphCamera, SphRenderPlugin};
+    pub use crate::render::{
+        ColorMap, LiquidStyle, ParticleDraw, ParticleView, RenderMode, SphCamera, SphRenderPlugin,
+    };
 }

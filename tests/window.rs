@@ -1,8 +1,11 @@
 //! The demo app in a real window: runs the `dam_break` app's plugin (with the resting-tank
-//! scenario, so the only motion is the mouse's), holds the left mouse button above the water
-//! with `xdotool` (or, without it, by warping the pointer and pressing the button in Bevy's
-//! input), takes a screenshot with Bevy's `Screenshot`, and checks that the water rose towards
-//! the cursor and that the picture is not blank.
+//! scenario, so the only motion is the mouse's). First in the liquid view the demo starts in:
+//! counts frames, takes a screenshot with Bevy's `Screenshot` and checks from its pixels that
+//! the resting layer is one body of water without holes whose surface line lies within two
+//! particle spacings of the highest particles. Then in the sprite view: counts frames, holds the
+//! left mouse button above the water with `xdotool` (or, without it, by warping the pointer and
+//! pressing the button in Bevy's input), takes a screenshot, and checks that the water rose
+//! towards the cursor and that the picture is not blank. Prints the frame rates of both views.
 //!
 //! Needs an X display: CI runs it under `xvfb-run` (Mesa's lavapipe renders on the CPU). Without
 //! `DISPLAY` it prints why and passes. The screenshot is kept in the target's temp folder.
@@ -12,9 +15,10 @@ use bevy::render::view::screenshot::{Screenshot, ScreenshotCaptured, save_to_dis
 use bevy::window::PrimaryWindow;
 use bevy::winit::WinitPlugin;
 use bevy_sph2d::demo::SphDemoPlugin;
+use bevy_sph2d::fluid::SphParams;
 use bevy_sph2d::fluid::{FluidParticle, Position, ScenarioKind, SphScenario, SphStats};
 use bevy_sph2d::interact::PointerSettings;
-use bevy_sph2d::render::SphCamera;
+use bevy_sph2d::render::{ParticleDraw, ParticleView, SphCamera};
 use std::process::Command;
 use std::sync::Mutex;
 
@@ -30,6 +34,8 @@ const TARGET: Vec2 = Vec2::new(0.8, 0.5);
 const LIFTED: f32 = 0.42;
 /// Real seconds before giving up.
 const TIMEOUT: f32 = 240.0;
+/// Real seconds each view's frames are counted over.
+const COUNT_FOR: f32 = 3.0;
 
 #[derive(Resource, Default)]
 struct Script {
@@ -42,12 +48,37 @@ struct Script {
     /// Frames, real time (s) and simulated time (s) since the layer settled.
     frames: u64,
     measured_from: Option<(f32, f64)>,
+    /// Frames counted in each view and over how long (real s).
+    counted: u64,
+    counting_since: f32,
+    liquid_fps: f32,
+    sprite_fps: f32,
+    /// Where the liquid screenshot's columns are checked.
+    columns: Vec<Column>,
+    /// Screen pixels per world metre, and the particle spacing (m).
+    pixels_per_metre: f32,
+    spacing: f32,
+}
+
+/// A column of the liquid screenshot: screen x, the screen y of the tank floor and of the
+/// highest particle near it (px, y down).
+#[derive(Debug, Clone, Copy)]
+struct Column {
+    x: u32,
+    floor: f32,
+    top: f32,
 }
 
 #[derive(Default, PartialEq, Debug, Clone, Copy)]
 enum Phase {
     #[default]
     Settle,
+    /// Counting the liquid view's frames, then its screenshot.
+    Liquid,
+    LiquidShot,
+    /// Counting the sprite view's frames.
+    Sprites,
+    Press,
     Pulling,
     Shot,
     Done,
@@ -132,6 +163,8 @@ fn script(
     particles: Query<&Position, With<FluidParticle>>,
     camera: Single<(&Camera, &GlobalTransform), With<SphCamera>>,
     mut window: Single<&mut Window, With<PrimaryWindow>>,
+    view: Res<ParticleView>,
+    params: Res<SphParams>,
     mut buttons: ResMut<ButtonInput<MouseButton>>,
     mut commands: Commands,
     mut exit: MessageWriter<AppExit>,
@@ -149,15 +182,70 @@ fn script(
         return;
     }
     let (camera, camera_transform) = *camera;
-    if script.phase != Phase::Settle {
+    if matches!(script.phase, Phase::Pulling | Phase::Shot | Phase::Done) {
         script.frames += 1;
     }
+    script.counted += 1;
     match script.phase {
-        // Let the window open, the shaders compile and the layer settle.
+        // Let the window open, the shaders compile and the layer settle, in the liquid view.
         Phase::Settle => {
-            if now < 3.0 || stats.time < 0.3 || stats.particles == 0 {
+            if now < 3.0 || stats.time < 0.5 || stats.particles == 0 {
                 return;
             }
+            if view.draw != ParticleDraw::Liquid {
+                script.verdict = Some(Err(format!("the demo starts in {:?}", view.draw)));
+                script.phase = Phase::Done;
+                return;
+            }
+            // The tool's circle follows the cursor: out of the picture, over the panel.
+            let corner = Vec2::splat(2.0);
+            let moved = script.xdotool
+                && xdotool(&[
+                    "mousemove".into(),
+                    "--window".into(),
+                    "%1".into(),
+                    "2".into(),
+                    "2".into(),
+                ]);
+            if !moved {
+                window.set_cursor_position(Some(corner));
+            }
+            script.counted = 0;
+            script.counting_since = now;
+            script.phase = Phase::Liquid;
+        }
+        Phase::Liquid => {
+            if now - script.counting_since < COUNT_FOR {
+                return;
+            }
+            script.liquid_fps = script.counted as f32 / (now - script.counting_since);
+            let scale = window.scale_factor();
+            let Some((columns, pixels_per_metre)) =
+                columns(&particles, camera, camera_transform, &params, scale)
+            else {
+                script.verdict = Some(Err("the tank is not in view".into()));
+                script.phase = Phase::Done;
+                return;
+            };
+            script.columns = columns;
+            script.pixels_per_metre = pixels_per_metre;
+            script.spacing = params.particle_spacing;
+            let path = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("window_liquid.png");
+            commands
+                .spawn(Screenshot::primary_window())
+                .observe(save_to_disk(path))
+                .observe(check_liquid);
+            script.phase = Phase::LiquidShot;
+        }
+        Phase::LiquidShot => {}
+        Phase::Sprites => {
+            if now - script.counting_since < COUNT_FOR {
+                return;
+            }
+            script.sprite_fps = script.counted as f32 / (now - script.counting_since);
+            script.phase = Phase::Press;
+        }
+        Phase::Press => {
             let Ok(cursor) = camera.world_to_viewport(camera_transform, TARGET.extend(0.0)) else {
                 return;
             };
@@ -229,6 +317,12 @@ fn script(
                     stats.particles
                 );
             }
+            println!(
+                "views at rest: liquid fps={:.1} sprites fps={:.1} (liquid frame time {:.2}x)",
+                script.liquid_fps,
+                script.sprite_fps,
+                script.sprite_fps / script.liquid_fps.max(1e-3)
+            );
             if let Ok(mut verdict) = VERDICT.lock() {
                 *verdict = script.verdict.clone();
             }
@@ -240,6 +334,138 @@ fn script(
             exit.write(AppExit::Success);
         }
     }
+}
+
+/// The screen columns to check in the liquid view: twelve across the middle 70% of the tank,
+/// with the floor and the highest particle within 1.5 spacings of each (physical px), and the
+/// screen's pixels per metre.
+fn columns(
+    particles: &Query<&Position, With<FluidParticle>>,
+    camera: &Camera,
+    transform: &GlobalTransform,
+    params: &SphParams,
+    scale: f32,
+) -> Option<(Vec<Column>, f32)> {
+    let tank = params.tank?;
+    let dx = params.particle_spacing;
+    let to_screen = |p: Vec2| {
+        camera
+            .world_to_viewport(transform, p.extend(0.0))
+            .ok()
+            .map(|v| v * scale)
+    };
+    let pixels_per_metre = (to_screen(Vec2::X)? - to_screen(Vec2::ZERO)?).x.abs();
+    let positions: Vec<Vec2> = particles.iter().map(|p| p.0).collect();
+    (0..12)
+        .map(|k| {
+            let x = tank.width * (0.15 + 0.7 * k as f32 / 11.0);
+            let top = positions
+                .iter()
+                .filter(|p| (p.x - x).abs() < 1.5 * dx)
+                .map(|p| p.y)
+                .fold(f32::NEG_INFINITY, f32::max);
+            let floor = to_screen(Vec2::new(x, 0.0))?;
+            Some(Column {
+                x: floor.x.round() as u32,
+                floor: floor.y,
+                top: to_screen(Vec2::new(x, top.is_finite().then_some(top)?))?.y,
+            })
+        })
+        .collect::<Option<Vec<_>>>()
+        .map(|columns| (columns, pixels_per_metre))
+}
+
+/// A pixel of the water's body, rim included (bluish and bright enough), not the background,
+/// the outline or the panel.
+fn is_water([r, _, b]: [u8; 3]) -> bool {
+    b > 80 && b as i32 > r as i32 + 30
+}
+
+/// The liquid view of the resting layer: in every column, water all the way from just above
+/// the floor to a surface within two spacings of the highest particle, and background just
+/// above it; a row at half depth all water across the columns.
+fn liquid_verdict(
+    pixel: impl Fn(u32, u32) -> Option<[u8; 3]>,
+    script: &Script,
+) -> Result<String, String> {
+    let limit = 2.0 * script.spacing * script.pixels_per_metre;
+    let mut offsets = Vec::new();
+    for column in &script.columns {
+        let water = |y: f32| pixel(column.x, y.round().max(0.0) as u32).is_some_and(is_water);
+        let start = column.floor - 3.0;
+        let mut surface = start;
+        while surface > 0.0 && water(surface) {
+            surface -= 1.0;
+        }
+        // Screen y grows downwards: positive is above the highest particle.
+        let above = column.top - surface;
+        if above.abs() > limit {
+            return Err(format!(
+                "liquid column at px {}: water from the floor up to px {surface} but the highest \
+                 particle is at px {:.0} ({:.1} spacings off; a hole or a misplaced surface)",
+                column.x,
+                column.top,
+                above / (script.spacing * script.pixels_per_metre)
+            ));
+        }
+        if (2..6).any(|k| water(surface - k as f32)) {
+            return Err(format!(
+                "liquid column at px {}: water again just above the surface at px {surface}",
+                column.x
+            ));
+        }
+        offsets.push(above / (script.spacing * script.pixels_per_metre));
+    }
+    let (first, last) = match (script.columns.first(), script.columns.last()) {
+        (Some(first), Some(last)) => (first, last),
+        _ => return Err("no liquid columns".into()),
+    };
+    let y = (0.5 * (first.floor + first.top)).round() as u32;
+    if let Some(x) = (first.x..=last.x).find(|&x| !pixel(x, y).is_some_and(is_water)) {
+        return Err(format!(
+            "liquid row at half depth (px {y}) has a hole at px {x}"
+        ));
+    }
+    let (low, high) = offsets
+        .iter()
+        .fold((f32::INFINITY, f32::NEG_INFINITY), |(l, h), &o| {
+            (l.min(o), h.max(o))
+        });
+    Ok(format!(
+        "{} columns of water without holes, the surface {low:.1}-{high:.1} spacings above the \
+         highest particles; the half-depth row is water from px {} to {}",
+        script.columns.len(),
+        first.x,
+        last.x
+    ))
+}
+
+/// Checks the liquid view's screenshot, then switches to the sprite view and counts its frames.
+fn check_liquid(
+    captured: On<ScreenshotCaptured>,
+    mut script: ResMut<Script>,
+    mut view: ResMut<ParticleView>,
+    time: Res<Time<Real>>,
+) {
+    let verdict = match captured.image.clone().try_into_dynamic() {
+        Ok(image) => {
+            let rgb = image.to_rgb8();
+            liquid_verdict(|x, y| rgb.get_pixel_checked(x, y).map(|p| p.0), &script)
+        }
+        Err(error) => Err(format!("liquid screenshot unreadable: {error:?}")),
+    };
+    match verdict {
+        Ok(message) => println!("liquid view: {message}"),
+        Err(message) => {
+            script.verdict = Some(Err(message));
+            script.phase = Phase::Done;
+            return;
+        }
+    }
+    view.draw = ParticleDraw::Sprites;
+    script.counted = 0;
+    script.counting_since = time.elapsed_secs();
+    script.phase = Phase::Sprites;
 }
 
 /// Not blank: most of the frame is not the clear colour's neighbourhood only, and it holds both

@@ -685,20 +685,24 @@ pub(crate) fn compute_dfsph_forces(
     });
     let solver = &*solver;
     let dfsph = &solver.dfsph;
-    for_each_particle!(
-        particles,
-        n,
+    for_each_particle!(particles, n, DfsphForceData, |(
+        slot,
+        mut velocity,
+        mut density,
+        mut acceleration,
+    ): QueryItem<
+        '_,
+        '_,
         DfsphForceData,
-        |(slot, mut velocity, mut density, mut acceleration): QueryItem<'_, '_, DfsphForceData>| {
-            if let Some(slot) = solver.dfsph_slot(slot) {
-                velocity.0 = dfsph.velocity(slot);
-                density.0 = dfsph.density(&c, slot);
-                acceleration.0 = solver.accelerations[slot];
-            } else {
-                acceleration.0 = c.gravity;
-            }
+    >| {
+        if let Some(slot) = solver.dfsph_slot(slot) {
+            velocity.0 = dfsph.velocity(slot);
+            density.0 = dfsph.density(&c, slot);
+            acceleration.0 = solver.accelerations[slot];
+        } else {
+            acceleration.0 = c.gravity;
         }
-    );
+    });
 }
 
 /// [`SphSubstepSystems::Integrate`](super::SphSubstepSystems::Integrate) for DFSPH: takes every

@@ -10,7 +10,7 @@ use crate::fluid::{
     Velocity,
 };
 use crate::gravity::{GravityAcceleration, GravitySystems, Mass};
-use crate::render::{SphCamera, cursor_to_world};
+use crate::render::{ParticleDraw, ParticleView, SphCamera, cursor_to_world};
 use bevy::input::mouse::AccumulatedMouseScroll;
 use bevy::prelude::*;
 use bevy::window::PrimaryWindow;
@@ -23,8 +23,9 @@ pub use tools::{PointerAction, PointerForce, falloff, nozzle_row, tilted_gravity
 /// [`PointerSettings`] (pull, drag, pour or erase); the right button always pushes; the wheel
 /// changes the radius. The tool's circle is drawn with gizmos.
 ///
-/// Keyboard: `Space` pauses, `.` runs a single tick, `R` resets the scenario, `←`/`→` tilt the
-/// tank (turn gravity), `↑` levels it, `1`–`5` pick the tool.
+/// Keyboard: `Space` pauses, `.` runs a single tick, `R` resets the scenario, `L` switches
+/// between the liquid and the particles ([`ParticleView::draw`]), `←`/`→` tilt the tank (turn
+/// gravity), `↑` levels it, `1`–`5` pick the tool.
 ///
 /// The cursor is read each frame before the fixed steps
 /// ([`RunFixedMainLoopSystems::BeforeFixedMainLoop`]) into [`Pointer`]; the fixed step applies
@@ -397,9 +398,11 @@ fn push_bodies(
         });
 }
 
-/// Space, `.`, `R`, arrows and `1`–`5`.
+/// Space, `.`, `R`, `L`, arrows and `1`–`5`.
+#[allow(clippy::too_many_arguments)]
 fn keyboard_controls(
     keys: Res<ButtonInput<KeyCode>>,
+    view: Option<ResMut<ParticleView>>,
     time: Res<Time<Real>>,
     mut pointer: ResMut<Pointer>,
     mut settings: ResMut<PointerSettings>,
@@ -418,6 +421,14 @@ fn keyboard_controls(
     }
     if keys.just_pressed(KeyCode::KeyR) {
         resets.write(ResetSimulation);
+    }
+    if keys.just_pressed(KeyCode::KeyL)
+        && let Some(mut view) = view
+    {
+        view.draw = match view.draw {
+            ParticleDraw::Sprites => ParticleDraw::Liquid,
+            ParticleDraw::Liquid => ParticleDraw::Sprites,
+        };
     }
     for (key, tool) in [
         KeyCode::Digit1,

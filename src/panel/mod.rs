@@ -9,7 +9,9 @@ use crate::fluid::{
 };
 use crate::gravity::{GravityParams, GravityStats};
 use crate::interact::{Pointer, PointerSettings, PointerTool};
-use crate::render::{BodyColor, BodyView, ColorMap, ParticleView, RenderMode, ViewInsets};
+use crate::render::{
+    BodyColor, BodyView, ColorMap, LiquidStyle, ParticleDraw, ParticleView, RenderMode, ViewInsets,
+};
 use bevy::prelude::*;
 use bevy_egui::input::EguiWantsInput;
 use bevy_egui::{EguiContexts, EguiPlugin, EguiPrimaryContextPass, egui};
@@ -37,6 +39,7 @@ impl Plugin for SphPanelPlugin {
         app.init_resource::<PanelState>()
             .init_resource::<SphScenario>()
             .init_resource::<ParticleView>()
+            .init_resource::<LiquidStyle>()
             .init_resource::<PointerSettings>()
             .init_resource::<Pointer>()
             .init_resource::<ViewInsets>()
@@ -133,6 +136,7 @@ struct PanelData<'w> {
     gravity: Option<ResMut<'w, GravityParams>>,
     gravity_stats: Option<Res<'w, GravityStats>>,
     bodies: Option<ResMut<'w, BodyView>>,
+    liquid: ResMut<'w, LiquidStyle>,
 }
 
 fn panel(
@@ -208,7 +212,7 @@ fn controls_section(
             resets.write(ResetSimulation);
         }
     });
-    ui.small("Mouse: left = tool, right = push, wheel = radius. Left/Right arrows tilt, Up levels, 1–5 tools, Tab hides the panel.");
+    ui.small("Mouse: left = tool, right = push, wheel = radius. Left/Right arrows tilt, Up levels, 1–5 tools, L liquid/particles, Tab hides the panel.");
 }
 
 fn stats_section(ui: &mut egui::Ui, data: &PanelData, stats: &SphStats) {
@@ -326,9 +330,11 @@ fn fluid_section(ui: &mut egui::Ui, data: &mut PanelData) {
                 };
                 if ui.button("Water").clicked() {
                     p = keep(SphParams::water(), &p);
+                    *data.liquid = LiquidStyle::water();
                 }
                 if ui.button("Honey").clicked() {
                     p = keep(SphParams::honey(), &p);
+                    *data.liquid = LiquidStyle::honey();
                 }
                 if ui.button("Gas").clicked() {
                     p = keep(SphParams::gas(), &p);
@@ -561,6 +567,9 @@ fn render_section(ui: &mut egui::Ui, data: &mut PanelData) {
         .default_open(true)
         .show(ui, |ui| {
             let mut view = data.view.clone();
+            enum_combo(ui, "draw", &mut view.draw, &ParticleDraw::ALL, |d| {
+                d.label()
+            });
             enum_combo(ui, "colour by", &mut view.mode, &RenderMode::ALL, |m| {
                 m.label()
             });
@@ -579,14 +588,18 @@ fn render_section(ui: &mut egui::Ui, data: &mut PanelData) {
                 });
                 color_bar(ui, view.color_map, view.range, view.mode.unit());
             }
-            param_slider(
-                ui,
-                &mut view.sprite_scale,
-                0.5..=4.0,
-                "sprite size",
-                "Δx",
-                false,
-            );
+            if view.draw == ParticleDraw::Liquid {
+                liquid_settings(ui, &mut data.liquid);
+            } else {
+                param_slider(
+                    ui,
+                    &mut view.sprite_scale,
+                    0.5..=4.0,
+                    "sprite size",
+                    "Δx",
+                    false,
+                );
+            }
             ui.checkbox(&mut view.interpolate, "interpolate between steps");
             ui.checkbox(&mut view.outline, "outline tank and obstacles");
             if view != *data.view {
@@ -624,6 +637,71 @@ fn render_section(ui: &mut egui::Ui, data: &mut PanelData) {
                 }
             }
         });
+}
+
+/// The liquid's look: shape, then colours.
+fn liquid_settings(ui: &mut egui::Ui, style: &mut LiquidStyle) {
+    let mut s = style.clone();
+    ui.horizontal(|ui| {
+        ui.label("look");
+        if ui.button("Water").clicked() {
+            s = LiquidStyle::water();
+        }
+        if ui.button("Honey").clicked() {
+            s = LiquidStyle::honey();
+        }
+    });
+    param_slider(
+        ui,
+        &mut s.threshold,
+        0.05..=0.9,
+        "surface threshold",
+        "",
+        false,
+    );
+    param_slider(
+        ui,
+        &mut s.splat_radius,
+        1.0..=4.0,
+        "splat radius",
+        "Δx",
+        false,
+    );
+    param_slider(
+        ui,
+        &mut s.resolution,
+        0.25..=1.0,
+        "field resolution",
+        "× window",
+        false,
+    );
+    param_slider(ui, &mut s.rim_width, 0.0..=3.0, "rim width", "Δx", false);
+    param_slider(ui, &mut s.depth, 0.02..=1.0, "deep colour at", "m", true);
+    param_slider(
+        ui,
+        &mut s.foam_speed,
+        0.2..=10.0,
+        "all foam at",
+        "m/s",
+        true,
+    );
+    for (label, color) in [
+        ("shallow", &mut s.shallow_color),
+        ("deep", &mut s.deep_color),
+        ("rim", &mut s.rim_color),
+        ("foam", &mut s.foam_color),
+    ] {
+        ui.horizontal(|ui| {
+            let mut rgba = color.to_srgba().to_f32_array();
+            if ui.color_edit_button_rgba_unmultiplied(&mut rgba).changed() {
+                *color = Color::srgba(rgba[0], rgba[1], rgba[2], rgba[3]);
+            }
+            ui.label(label);
+        });
+    }
+    if s != *style {
+        *style = s;
+    }
 }
 
 fn tools_section(ui: &mut egui::Ui, data: &mut PanelData) {

@@ -4,6 +4,7 @@
 
 pub mod bodies;
 pub mod colormap;
+pub mod liquid;
 pub mod view;
 
 use crate::fluid::{
@@ -15,6 +16,7 @@ use bevy::render::render_resource::{Extent3d, TextureDimension, TextureFormat};
 
 pub use bodies::{BodyColor, BodyView};
 pub use colormap::{ColorMap, ColorRange, ColorTable};
+pub use liquid::LiquidStyle;
 pub use view::{SphCamera, ViewInsets, cursor_to_world, fit_tank};
 
 /// Draws fluid particles as sprites and keeps a [`SphCamera`] framing the tank.
@@ -35,7 +37,31 @@ pub use view::{SphCamera, ViewInsets, cursor_to_world, fit_tank};
 #[derive(Debug, Clone, Copy, Default)]
 pub struct SphRenderPlugin;
 
-/// What the sprites show.
+/// How fluid particles are drawn.
+#[derive(Reflect, Debug, Clone, Copy, Default, PartialEq, Eq, Hash)]
+pub enum ParticleDraw {
+    /// A round sprite per particle, for inspecting the simulation.
+    #[default]
+    Sprites,
+    /// A liquid with a surface (see [`LiquidStyle`]): the particles are splatted into a smooth
+    /// field, and the body is where the field is above a threshold.
+    Liquid,
+}
+
+impl ParticleDraw {
+    /// Both, in menu order.
+    pub const ALL: [ParticleDraw; 2] = [ParticleDraw::Sprites, ParticleDraw::Liquid];
+
+    /// The name in menus.
+    pub fn label(self) -> &'static str {
+        match self {
+            ParticleDraw::Sprites => "Particles",
+            ParticleDraw::Liquid => "Liquid",
+        }
+    }
+}
+
+/// What the colours show (on sprites, or inside the liquid).
 #[derive(Reflect, Debug, Clone, Copy, Default, PartialEq, Eq, Hash)]
 pub enum RenderMode {
     /// Density, kg/m³.
@@ -94,7 +120,9 @@ impl RenderMode {
 #[derive(Resource, Reflect, Debug, Clone, PartialEq)]
 #[reflect(Resource, Default, Debug)]
 pub struct ParticleView {
-    /// The quantity the colour shows.
+    /// Sprites or a liquid.
+    pub draw: ParticleDraw,
+    /// The quantity the colour shows ([`RenderMode::Solid`] in the liquid: its own colours).
     pub mode: RenderMode,
     /// The colour map.
     pub color_map: ColorMap,
@@ -115,6 +143,7 @@ pub struct ParticleView {
 impl Default for ParticleView {
     fn default() -> Self {
         Self {
+            draw: ParticleDraw::Sprites,
             mode: RenderMode::Density,
             color_map: ColorMap::Blues,
             auto_range: true,
@@ -173,6 +202,7 @@ impl Plugin for SphRenderPlugin {
                     (
                         update_color_range,
                         update_sprites,
+                        liquid::update_liquid,
                         bodies::update_body_sprites,
                     )
                         .chain()
@@ -180,6 +210,7 @@ impl Plugin for SphRenderPlugin {
                 ),
             )
             .add_systems(Update, draw_outlines);
+        liquid::build(app);
     }
 }
 
@@ -238,7 +269,16 @@ fn attach_sprite(
         sprite,
         Transform::from_translation(position.extend(0.0)),
         PreviousPosition(position),
+        sprite_visibility(view.draw),
     ));
+}
+
+/// Sprites show in [`ParticleDraw::Sprites`] only.
+fn sprite_visibility(draw: ParticleDraw) -> Visibility {
+    match draw {
+        ParticleDraw::Sprites => Visibility::Inherited,
+        ParticleDraw::Liquid => Visibility::Hidden,
+    }
 }
 
 fn remember_previous_positions(mut particles: Query<(&Position, &mut PreviousPosition)>) {
@@ -312,6 +352,7 @@ type SpriteData = (
     &'static Pressure,
     &'static mut Transform,
     &'static mut Sprite,
+    &'static mut Visibility,
 );
 
 /// Interpolated transforms, colours and sizes, in parallel.
@@ -323,6 +364,17 @@ fn update_sprites(
     mut table: Local<Option<(ColorMap, ColorTable)>>,
     mut particles: Query<SpriteData, With<FluidParticle>>,
 ) {
+    let shown = sprite_visibility(view.draw);
+    if view.draw == ParticleDraw::Liquid {
+        // Hidden while the liquid draws: nothing else to update.
+        if view.is_changed() {
+            for item in &mut particles {
+                let mut visibility = item.7;
+                visibility.set_if_neq(shown);
+            }
+        }
+        return;
+    }
     if table.as_ref().is_none_or(|(map, _)| *map != view.color_map) {
         *table = Some((view.color_map, view.color_map.table(256)));
     }
@@ -338,7 +390,17 @@ fn update_sprites(
     let view = &*view;
     let texture = texture.as_deref().map(|t| &t.0);
     particles.par_iter_mut().for_each(
-        |(position, previous, velocity, density, pressure, mut transform, mut sprite)| {
+        |(
+            position,
+            previous,
+            velocity,
+            density,
+            pressure,
+            mut transform,
+            mut sprite,
+            mut visibility,
+        )| {
+            visibility.set_if_neq(shown);
             let at = previous.0.lerp(position.0, alpha).extend(0.0);
             if transform.translation != at {
                 transform.translation = at;

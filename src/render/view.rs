@@ -3,8 +3,8 @@
 
 use crate::fluid::SphParams;
 use bevy::camera::ScalingMode;
-use bevy::prelude::*;
 use bevy::core_pipeline::tonemapping::DebandDither;
+use bevy::prelude::*;
 use bevy::render::view::Msaa;
 use bevy::window::PrimaryWindow;
 
