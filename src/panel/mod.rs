@@ -167,12 +167,20 @@ fn panel(
         .default_size(300.0)
         .show(&mut root, |ui| {
             egui::ScrollArea::vertical().show(ui, |ui| {
+                // What the scene has comes first and open; the fluid's sections start folded
+                // in a scene without fluid (the galaxy).
+                let fluid = has_fluid(&data);
                 controls_section(ui, &mut data, &mut resets);
-                stats_section(ui, &data, &stats);
-                scenario_section(ui, &mut data, &mut resets);
-                fluid_section(ui, &mut data);
-                gravity_section(ui, &mut data);
-                render_section(ui, &mut data);
+                stats_section(ui, &data, &stats, fluid);
+                if !fluid {
+                    gravity_section(ui, &mut data);
+                }
+                scenario_section(ui, &mut data, &mut resets, fluid);
+                fluid_section(ui, &mut data, fluid);
+                if fluid {
+                    gravity_section(ui, &mut data);
+                }
+                render_section(ui, &mut data, fluid);
                 tools_section(ui, &mut data);
             });
         })
@@ -215,7 +223,13 @@ fn controls_section(
     ui.small("Mouse: left = tool, right = push, wheel = radius. Left/Right arrows tilt, Up levels, 1–5 tools, L liquid/particles, Tab hides the panel.");
 }
 
-fn stats_section(ui: &mut egui::Ui, data: &PanelData, stats: &SphStats) {
+/// Whether the scene has fluid: a scenario that spawns some, or particles.
+fn has_fluid(data: &PanelData) -> bool {
+    data.scenario.kind != ScenarioKind::Empty || data.stats.particles > 0
+}
+
+/// The clock's and the frame's statistics, and the fluid's where the scene has fluid.
+fn stats_section(ui: &mut egui::Ui, data: &PanelData, stats: &SphStats, fluid: bool) {
     egui::CollapsingHeader::new("Statistics")
         .default_open(true)
         .show(ui, |ui| {
@@ -227,6 +241,12 @@ fn stats_section(ui: &mut egui::Ui, data: &PanelData, stats: &SphStats) {
             };
             let mut rows = Vec::new();
             let mut row = |name: &'static str, value: String| rows.push((name, value));
+            if !fluid {
+                row("sim speed", format!("{:.2} × real time", rates.sim_speed));
+                row("fps", format!("{:.0}", rates.fps));
+                stat_grid(ui, "stats", rows);
+                return;
+            }
             row("particles", format!("{}", stats.particles));
             row("wall particles", format!("{}", stats.wall_particles));
             row("sub-steps / s", format!("{:.0}", rates.substeps_per_s));
@@ -274,9 +294,10 @@ fn scenario_section(
     ui: &mut egui::Ui,
     data: &mut PanelData,
     resets: &mut MessageWriter<ResetSimulation>,
+    fluid: bool,
 ) {
     egui::CollapsingHeader::new("Scenario")
-        .default_open(true)
+        .default_open(fluid)
         .show(ui, |ui| {
             let mut scenario = *data.scenario;
             enum_combo(
@@ -305,9 +326,9 @@ fn scenario_section(
         });
 }
 
-fn fluid_section(ui: &mut egui::Ui, data: &mut PanelData) {
+fn fluid_section(ui: &mut egui::Ui, data: &mut PanelData, fluid: bool) {
     egui::CollapsingHeader::new("Fluid")
-        .default_open(true)
+        .default_open(fluid)
         .show(ui, |ui| {
             let mut p = data.params.clone();
             ui.horizontal(|ui| {
@@ -562,48 +583,51 @@ fn gravity_section(ui: &mut egui::Ui, data: &mut PanelData) {
         });
 }
 
-fn render_section(ui: &mut egui::Ui, data: &mut PanelData) {
+/// How the fluid (in a scene with fluid) and the gravity bodies are drawn.
+fn render_section(ui: &mut egui::Ui, data: &mut PanelData, fluid: bool) {
     egui::CollapsingHeader::new("Rendering")
         .default_open(true)
         .show(ui, |ui| {
-            let mut view = data.view.clone();
-            enum_combo(ui, "draw", &mut view.draw, &ParticleDraw::ALL, |d| {
-                d.label()
-            });
-            enum_combo(ui, "colour by", &mut view.mode, &RenderMode::ALL, |m| {
-                m.label()
-            });
-            enum_combo(ui, "colour map", &mut view.color_map, &ColorMap::ALL, |m| {
-                m.label()
-            });
-            if view.mode != RenderMode::Solid {
-                ui.checkbox(&mut view.auto_range, "auto range");
-                ui.add_enabled_ui(!view.auto_range, |ui| {
-                    ui.horizontal(|ui| {
-                        ui.add(egui::DragValue::new(&mut view.range.min).speed(0.1));
-                        ui.label("to");
-                        ui.add(egui::DragValue::new(&mut view.range.max).speed(0.1));
-                        ui.label(view.mode.unit());
-                    });
+            if fluid {
+                let mut view = data.view.clone();
+                enum_combo(ui, "draw", &mut view.draw, &ParticleDraw::ALL, |d| {
+                    d.label()
                 });
-                color_bar(ui, view.color_map, view.range, view.mode.unit());
-            }
-            if view.draw == ParticleDraw::Liquid {
-                liquid_settings(ui, &mut data.liquid);
-            } else {
-                param_slider(
-                    ui,
-                    &mut view.sprite_scale,
-                    0.5..=4.0,
-                    "sprite size",
-                    "Δx",
-                    false,
-                );
-            }
-            ui.checkbox(&mut view.interpolate, "interpolate between steps");
-            ui.checkbox(&mut view.outline, "outline tank and obstacles");
-            if view != *data.view {
-                *data.view = view;
+                enum_combo(ui, "colour by", &mut view.mode, &RenderMode::ALL, |m| {
+                    m.label()
+                });
+                enum_combo(ui, "colour map", &mut view.color_map, &ColorMap::ALL, |m| {
+                    m.label()
+                });
+                if view.mode != RenderMode::Solid {
+                    ui.checkbox(&mut view.auto_range, "auto range");
+                    ui.add_enabled_ui(!view.auto_range, |ui| {
+                        ui.horizontal(|ui| {
+                            ui.add(egui::DragValue::new(&mut view.range.min).speed(0.1));
+                            ui.label("to");
+                            ui.add(egui::DragValue::new(&mut view.range.max).speed(0.1));
+                            ui.label(view.mode.unit());
+                        });
+                    });
+                    color_bar(ui, view.color_map, view.range, view.mode.unit());
+                }
+                if view.draw == ParticleDraw::Liquid {
+                    liquid_settings(ui, &mut data.liquid);
+                } else {
+                    param_slider(
+                        ui,
+                        &mut view.sprite_scale,
+                        0.5..=4.0,
+                        "sprite size",
+                        "Δx",
+                        false,
+                    );
+                }
+                ui.checkbox(&mut view.interpolate, "interpolate between steps");
+                ui.checkbox(&mut view.outline, "outline tank and obstacles");
+                if view != *data.view {
+                    *data.view = view;
+                }
             }
             if let Some(bodies) = data.bodies.as_mut() {
                 ui.separator();

@@ -99,10 +99,12 @@ pub(super) fn update_body_sprites(
         return;
     }
     let color_by = view.color_by;
+    let stride = bodies.iter().len().div_ceil(super::QUANTILE_SAMPLE).max(1);
     values.clear();
     values.extend(
         bodies
             .iter()
+            .step_by(stride)
             .map(|(_, _, v, m, _, _)| shown(color_by, v, m)),
     );
     let heaviest = bodies.iter().map(|b| b.3.0).fold(0.0f32, f32::max);

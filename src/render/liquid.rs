@@ -78,7 +78,7 @@ impl LiquidStyle {
             resolution: 0.5,
             shallow_color: Color::srgba(0.30, 0.62, 0.92, 0.92),
             deep_color: Color::srgba(0.05, 0.22, 0.52, 0.98),
-            depth: 0.25,
+            depth: 0.15,
             rim_color: Color::srgba(0.75, 0.90, 1.0, 0.8),
             rim_width: 0.8,
             foam_color: Color::srgba(0.92, 0.97, 1.0, 0.85),

@@ -214,6 +214,9 @@ impl Plugin for SphRenderPlugin {
     }
 }
 
+/// Values the auto range takes its quantiles from (a sample of larger scenes).
+const QUANTILE_SAMPLE: usize = 4096;
+
 /// Texture side, px: enough for a smooth edge at the sizes particles are drawn.
 const TEXTURE_SIZE: u32 = 32;
 
@@ -316,8 +319,15 @@ fn update_color_range(
         return;
     }
     let mode = view.mode;
+    // A sample is enough for quantiles ([`ColorRange::from_quantiles`] takes at most 4,096).
+    let stride = particles.iter().len().div_ceil(QUANTILE_SAMPLE).max(1);
     values.clear();
-    values.extend(particles.iter().map(|(v, d, p)| shown_value(mode, v, d, p)));
+    values.extend(
+        particles
+            .iter()
+            .step_by(stride)
+            .map(|(v, d, p)| shown_value(mode, v, d, p)),
+    );
     let (low, high) = mode.quantiles();
     let Some(mut target) = ColorRange::from_quantiles(&values, low, high) else {
         return;

@@ -28,10 +28,8 @@ struct Liquid {
 @group(#{MATERIAL_BIND_GROUP}) @binding(3) var color_map: texture_2d<f32>;
 @group(#{MATERIAL_BIND_GROUP}) @binding(4) var color_map_sampler: sampler;
 
-// Taps up the screen for the depth of liquid above a pixel, and halvings of the tap that
-// brackets the surface.
-const DEPTH_TAPS: i32 = 4;
-const REFINE_STEPS: i32 = 3;
+// Taps up the screen for the depth of liquid above a pixel.
+const DEPTH_TAPS: i32 = 6;
 
 @fragment
 fn fragment(in: VertexOutput) -> @location(0) vec4<f32> {
@@ -48,36 +46,18 @@ fn fragment(in: VertexOutput) -> @location(0) vec4<f32> {
         return vec4(0.0);
     }
 
-    // Depth below the surface straight above, as a fraction of the deep colour's depth: the
-    // first of the taps up the screen that is outside the liquid brackets the surface, and a
-    // few halvings of the bracket place it to a pixel or two (continuous: no colour bands).
+    // Depth: how much of the column above, up to the deep colour's depth, is liquid. Each tap
+    // counts with the field's own smooth rise across the surface (not a hard inside/outside),
+    // and the taps lie closer than that rise is wide, so the colour has neither bands nor
+    // edges where the surface above steps.
     let step_uv = liquid.shape.w / f32(DEPTH_TAPS);
-    var inside = 0.0;
-    var outside = -1.0;
+    let soft = vec2(0.0, 1.0);
+    var depth = 0.0;
     for (var k = 1; k <= DEPTH_TAPS; k++) {
-        let uv = field_uv - vec2(0.0, step_uv * f32(k));
-        let here = textureSampleLevel(field, field_sampler, uv, 0.0).r;
-        if outside < 0.0 {
-            if here < threshold {
-                outside = f32(k);
-            } else {
-                inside = f32(k);
-            }
-        }
+        let uv = field_uv - vec2(0.0, step_uv * (f32(k) - 0.5));
+        depth += smoothstep(soft.x, soft.y, textureSampleLevel(field, field_sampler, uv, 0.0).r);
     }
-    var depth = 1.0;
-    if outside > 0.0 {
-        for (var k = 0; k < REFINE_STEPS; k++) {
-            let middle = 0.5 * (inside + outside);
-            let uv = field_uv - vec2(0.0, step_uv * middle);
-            if textureSampleLevel(field, field_sampler, uv, 0.0).r < threshold {
-                outside = middle;
-            } else {
-                inside = middle;
-            }
-        }
-        depth = 0.5 * (inside + outside) / f32(DEPTH_TAPS);
-    }
+    depth /= f32(DEPTH_TAPS);
     depth = smoothstep(0.0, 1.0, depth);
 
     let weight = max(f.r, 1e-4);
