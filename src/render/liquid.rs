@@ -44,8 +44,8 @@ pub struct LiquidStyle {
     pub threshold: f32,
     /// Splat radius, in particle spacings.
     pub splat_radius: f32,
-    /// Field texels per window pixel (the field is smooth: half the window's resolution shows
-    /// no steps and costs a quarter).
+    /// Field texels per window pixel (the field is smooth: at 0.4 of the window's resolution it
+    /// shows no steps and costs a sixth).
     pub resolution: f32,
     /// The body's colour just under the surface (its alpha: the body's opacity there).
     pub shallow_color: Color,
@@ -75,7 +75,7 @@ impl LiquidStyle {
         Self {
             threshold: 0.25,
             splat_radius: 2.0,
-            resolution: 0.5,
+            resolution: 0.4,
             shallow_color: Color::srgba(0.30, 0.62, 0.92, 0.92),
             deep_color: Color::srgba(0.05, 0.22, 0.52, 0.98),
             depth: 0.15,
