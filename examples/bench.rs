@@ -1,5 +1,5 @@
 //! Headless benchmark: a dam break of N particles, stepped K times on plain slices (rayon) and
-//! through the ECS (`par_iter_mut`), in the same process, on T threads; or, with `--gravity`,
+//! through the ECS, in the same process, on T threads; or, with `--gravity`,
 //! Barnes-Hut gravity on a disc of N bodies around a heavy centre.
 //!
 //! ```text
@@ -22,8 +22,6 @@
 //! tick through the ECS: leapfrog kick and drift, tree build, field evaluation, kick. Up to 20,000
 //! bodies a line starting `direct` gives exact direct summation on the same bodies before it.
 
-mod support;
-
 use bevy::prelude::*;
 use bevy::time::TimeUpdateStrategy;
 use bevy_sph2d::fluid::scenario::SCENARIO_TANK;
@@ -32,20 +30,83 @@ use bevy_sph2d::fluid::{
     FluidBlock, PressureSolver, ScenarioKind, SphParams, SphScenario, SphSolver, Tank,
 };
 use bevy_sph2d::prelude::*;
+use clap::error::ErrorKind;
+use clap::{CommandFactory, Parser, ValueEnum};
 use std::time::{Duration, Instant};
-use support::{Args, fail};
 
-const USAGE: &str = "\
-usage: bench --particles N --steps K [--threads T] [--support-ratio R] [--kernel wendland|cubic|muller]
-             [--solver dfsph|wcsph]
-  a dam break (column 1:2, tank 4 columns wide) of about N particles at 5 mm spacing,
-  K sub-steps on each path after 10 warm-up steps
-usage: bench --realtime --particles N [--threads T] [--solver dfsph|wcsph]
-  the demo's dam break (tank 1.6 m x 0.9 m, column 0.48 m x 0.54 m, spacing from N) with the
-  solver's default settings, through the ECS at 64 ticks/s, for 1 simulated second
-usage: bench --gravity --bodies N --steps K [--threads T] [--theta X]
-  Barnes-Hut gravity on a disc of N bodies around a heavy centre (G = 1, radius 1 m),
-  K fixed ticks through the ECS after one warm-up tick";
+/// Headless benchmark. By default a dam break (column 1:2, tank 4 columns wide) of about
+/// --particles at 5 mm spacing, --steps sub-steps on plain slices and through the ECS after 10
+/// warm-up steps; with --realtime the demo's dam break (tank 1.6 m x 0.9 m, column 0.48 m x
+/// 0.54 m, spacing from --particles) with the solver's default settings through the ECS at 64
+/// ticks/s for 1 simulated second; with --gravity Barnes-Hut gravity on a disc of --bodies
+/// around a heavy centre (G = 1, radius 1 m), --steps fixed ticks after one warm-up tick.
+#[derive(Parser, Debug)]
+#[command(name = "bench", allow_negative_numbers = true)]
+struct Cli {
+    /// Run the demo's dam break against the clock.
+    #[arg(long, conflicts_with = "gravity")]
+    realtime: bool,
+    /// Benchmark Barnes-Hut gravity instead of the fluid.
+    #[arg(long)]
+    gravity: bool,
+    /// Fluid particles [default: 100000, or 2500 with --realtime].
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    particles: Option<u32>,
+    /// Sub-steps (fluid) or ticks (gravity) [default: 100, or 10 with --gravity].
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    steps: Option<u32>,
+    /// Threads.
+    #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(1..))]
+    threads: u32,
+    /// Kernel support / spacing.
+    #[arg(long, default_value_t = 2.0)]
+    support_ratio: f32,
+    /// Smoothing kernel.
+    #[arg(long, value_enum, default_value_t = Kernel::Wendland)]
+    kernel: Kernel,
+    /// Pressure solver.
+    #[arg(long, value_enum, default_value_t = Solver::Dfsph)]
+    solver: Solver,
+    /// Gravity bodies.
+    #[arg(long, default_value_t = 100_000, value_parser = clap::value_parser!(u32).range(1..))]
+    bodies: u32,
+    /// Barnes-Hut opening angle.
+    #[arg(long, default_value_t = 1.0)]
+    theta: f32,
+}
+
+/// The fluid's pressure solver.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum Solver {
+    /// Incompressible (divergence-free SPH).
+    Dfsph,
+    /// Weakly compressible.
+    Wcsph,
+}
+
+impl Solver {
+    fn solver(self) -> PressureSolver {
+        match self {
+            Solver::Dfsph => PressureSolver::Dfsph,
+            Solver::Wcsph => PressureSolver::Wcsph,
+        }
+    }
+}
+
+/// The smoothing kernel.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum Kernel {
+    Wendland,
+    Cubic,
+    Muller,
+}
+
+/// Exits with `message`, the usage and status 2, as for any other bad argument.
+fn refuse(message: impl std::fmt::Display) -> ! {
+    Cli::command()
+        .error(ErrorKind::ValueValidation, message)
+        .exit()
+}
 
 /// Largest body count for which the direct-sum comparison runs.
 const DIRECT_LIMIT: usize = 20_000;
@@ -55,64 +116,41 @@ const SUBSTEPS_PER_TICK: u32 = 10;
 const WARM_UP: usize = 10;
 
 fn main() {
-    let args = Args::parse(
-        &[
-            "particles",
-            "steps",
-            "threads",
-            "support-ratio",
-            "kernel",
-            "bodies",
-            "theta",
-            "solver",
-        ],
-        &["gravity", "realtime"],
-    )
-    .unwrap_or_else(|e| fail(&e, USAGE));
-    if args.flag("gravity") {
-        gravity_bench(&args);
+    let cli = Cli::parse();
+    if cli.gravity {
+        gravity_bench(&cli);
         return;
     }
-    if args.flag("realtime") {
-        realtime_bench(&args);
+    if cli.realtime {
+        realtime_bench(&cli);
         return;
     }
-    let run = || -> Result<(usize, usize, usize, SphParams), String> {
-        let particles: usize = args.get("particles", 100_000)?;
-        let steps: usize = args.get("steps", 100)?;
-        let threads: usize = args.get("threads", 2)?;
-        if particles == 0 || steps == 0 || threads == 0 {
-            return Err("--particles, --steps and --threads must be positive".into());
-        }
-        let kernel = match args.text("kernel").unwrap_or("wendland") {
-            "wendland" => KernelKind::WendlandC2,
-            "cubic" => KernelKind::CubicSpline,
-            "muller" => KernelKind::Muller,
-            other => return Err(format!("unknown kernel '{other}'")),
-        };
-        let solver = match args.text("solver").unwrap_or("dfsph") {
-            "wcsph" => PressureSolver::Wcsph,
-            "dfsph" => PressureSolver::Dfsph,
-            other => return Err(format!("unknown solver '{other}' (wcsph or dfsph)")),
-        };
-        let spacing = 0.005f32;
-        let columns = ((particles as f32 / 2.0).sqrt().round() as usize).max(1);
-        let rows = particles.div_ceil(columns);
-        let column = Vec2::new(columns as f32, rows as f32) * spacing;
-        let params = SphParams {
-            particle_spacing: spacing,
-            support_ratio: args.positive("support-ratio", 2.0)?,
-            kernel,
-            solver,
-            speed_of_sound: SphParams::speed_of_sound_for_height(column.y),
-            tank: Some(Tank::new(4.0 * column.x, 1.25 * column.y)),
-            max_substeps: SUBSTEPS_PER_TICK,
-            ..default()
-        };
-        params.validate().map_err(|e| e.to_string())?;
-        Ok((columns * rows, steps, threads, params))
+    let particles = cli.particles.unwrap_or(100_000) as usize;
+    let steps = cli.steps.unwrap_or(100) as usize;
+    let threads = cli.threads as usize;
+    let kernel = match cli.kernel {
+        Kernel::Wendland => KernelKind::WendlandC2,
+        Kernel::Cubic => KernelKind::CubicSpline,
+        Kernel::Muller => KernelKind::Muller,
     };
-    let (particles, steps, threads, params) = run().unwrap_or_else(|e| fail(&e, USAGE));
+    let spacing = 0.005f32;
+    let columns = ((particles as f32 / 2.0).sqrt().round() as usize).max(1);
+    let rows = particles.div_ceil(columns);
+    let column = Vec2::new(columns as f32, rows as f32) * spacing;
+    let params = SphParams {
+        particle_spacing: spacing,
+        support_ratio: cli.support_ratio,
+        kernel,
+        solver: cli.solver.solver(),
+        speed_of_sound: SphParams::speed_of_sound_for_height(column.y),
+        tank: Some(Tank::new(4.0 * column.x, 1.25 * column.y)),
+        max_substeps: SUBSTEPS_PER_TICK,
+        ..default()
+    };
+    if let Err(error) = params.validate() {
+        refuse(error);
+    }
+    let particles = columns * rows;
     let tank = params.tank.expect("the bench has a tank");
     let column = Vec2::new(tank.width / 4.0, tank.height / 1.25);
     let block = FluidBlock::dam_break(column.x + 1e-4, column.y + 1e-4);
@@ -201,21 +239,10 @@ fn main() {
 
 /// The demo's dam break through the ECS for one simulated second: how fast it runs against the
 /// clock.
-fn realtime_bench(args: &Args) {
-    let run = || -> Result<(u32, usize, PressureSolver), String> {
-        let particles: u32 = args.get("particles", 2_500)?;
-        let threads: usize = args.get("threads", 2)?;
-        if particles == 0 || threads == 0 {
-            return Err("--particles and --threads must be positive".into());
-        }
-        let solver = match args.text("solver").unwrap_or("dfsph") {
-            "wcsph" => PressureSolver::Wcsph,
-            "dfsph" => PressureSolver::Dfsph,
-            other => return Err(format!("unknown solver '{other}' (wcsph or dfsph)")),
-        };
-        Ok((particles, threads, solver))
-    };
-    let (particles, threads, solver) = run().unwrap_or_else(|e| fail(&e, USAGE));
+fn realtime_bench(cli: &Cli) {
+    let particles = cli.particles.unwrap_or(2_500);
+    let threads = cli.threads as usize;
+    let solver = cli.solver.solver();
     let scenario = SphScenario::new(ScenarioKind::DamBreak, particles);
     let tank = SCENARIO_TANK;
     // Each solver's own defaults (WCSPH needs the wider support).
@@ -232,7 +259,7 @@ fn realtime_bench(args: &Args) {
         ..base
     };
     if let Err(error) = params.validate() {
-        fail(&error.to_string(), USAGE);
+        refuse(error);
     }
     let mut app = App::new();
     app.add_plugins((
@@ -314,18 +341,11 @@ fn time_gravity(bodies: usize, steps: usize, threads: usize, params: GravityPara
     seconds
 }
 
-fn gravity_bench(args: &Args) {
-    let run = || -> Result<(usize, usize, usize, f32), String> {
-        let bodies: usize = args.get("bodies", 100_000)?;
-        let steps: usize = args.get("steps", 10)?;
-        let threads: usize = args.get("threads", 2)?;
-        let theta: f32 = args.get("theta", 1.0)?;
-        if bodies == 0 || steps == 0 || threads == 0 {
-            return Err("--bodies, --steps and --threads must be positive".into());
-        }
-        Ok((bodies, steps, threads, theta))
-    };
-    let (bodies, steps, threads, theta) = run().unwrap_or_else(|e| fail(&e, USAGE));
+fn gravity_bench(cli: &Cli) {
+    let bodies = cli.bodies as usize;
+    let steps = cli.steps.unwrap_or(10) as usize;
+    let threads = cli.threads as usize;
+    let theta = cli.theta;
     let params = GravityParams {
         gravitational_constant: 1.0,
         theta,
@@ -333,7 +353,7 @@ fn gravity_bench(args: &Args) {
         ..default()
     };
     if let Err(error) = params.validate() {
-        fail(&error.to_string(), USAGE);
+        refuse(error);
     }
     // The tree build and the field run on rayon from inside Bevy's systems, which run on Bevy's
     // threads, so they use rayon's global pool: give it the same thread count.

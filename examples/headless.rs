@@ -10,8 +10,6 @@
 //!     --duration 1 --every 0.01 --seed 1 --out dam_break.csv
 //! ```
 
-mod support;
-
 use bevy::prelude::*;
 use bevy::time::TimeUpdateStrategy;
 use bevy_sph2d::fluid::{
@@ -19,66 +17,151 @@ use bevy_sph2d::fluid::{
 };
 use bevy_sph2d::gravity::GravityAcceleration;
 use bevy_sph2d::prelude::*;
+use clap::error::ErrorKind;
+use clap::{CommandFactory, Parser, ValueEnum};
+use indicatif::{ProgressBar, ProgressStyle};
 use std::io::{BufWriter, Write};
 use std::time::Duration;
-use support::{Args, fail};
 
-const USAGE: &str = "\
-usage: headless [options]
-  --scenario dam-break|tank|galaxy   what to simulate (default dam-break)
-  --column-width W            dam-break column width, m (default 0.1)
-  --column-height H           dam-break column height, m (default 0.2)
-  --tank-width L              tank inner width, m (default 0.8)
-  --tank-height M             tank inner height, m (default 0.4)
-  --depth D                   tank scenario: water depth, m (default 0.2)
-  --spacing S                 particle spacing, m (default: column width / 40, or depth / 40)
-  --duration T                simulated time, s (default 1)
-  --every DT                  time between frames, s (default 0.01)
-  --seed N                    jitter seed (default 0)
-  --out FILE.csv              output file (default headless.csv)
-  --jitter J                  spawn jitter, fraction of the spacing (default 0.0001)
-  --solver dfsph|wcsph        pressure solver (default dfsph, incompressible)
-  --support-ratio R           kernel support / spacing (default 3 for wcsph, 2 for dfsph)
-  --kernel wendland|cubic|muller   (default wendland)
-  --speed-of-sound C          m/s (default 20 sqrt(g * fluid height))
-  --viscosity NU              kinematic viscosity, m^2/s (default 1e-6)
-  --alpha A                   artificial viscosity (default 0.02)
-  --threads T                 compute threads (default: all cores)
-galaxy options:
-  --bodies N                  bodies, the central one included (default 20000)
-  --theta X                   Barnes-Hut opening angle (default 0.7)
-  --steps K                   fixed steps of --dt seconds (default 100)
-  --dt S                      step, s (default 0.002)
-  --frame-steps F             steps between frames (default: K, so the first and last frame)
-  --softening E               m (default 0.01)";
+/// Headless recorder: runs a fluid scenario (or a galaxy of gravity bodies) with
+/// `MinimalPlugins` and writes CSV frames `time,id,x,y,vx,vy,ax,ay,mass,density,pressure` in SI
+/// units. Shows a progress bar on stderr when it is a terminal.
+#[derive(Parser, Debug)]
+#[command(name = "headless", allow_negative_numbers = true)]
+struct Cli {
+    /// What to simulate.
+    #[arg(long, value_enum, default_value_t = Scenario::DamBreak)]
+    scenario: Scenario,
+    /// Dam-break column width, m.
+    #[arg(long, default_value_t = 0.1, value_parser = positive)]
+    column_width: f32,
+    /// Dam-break column height, m.
+    #[arg(long, default_value_t = 0.2, value_parser = positive)]
+    column_height: f32,
+    /// Tank inner width, m.
+    #[arg(long, default_value_t = 0.8, value_parser = positive)]
+    tank_width: f32,
+    /// Tank inner height, m.
+    #[arg(long, default_value_t = 0.4, value_parser = positive)]
+    tank_height: f32,
+    /// Tank scenario: water depth, m.
+    #[arg(long, default_value_t = 0.2, value_parser = positive)]
+    depth: f32,
+    /// Particle spacing, m [default: column width / 40, or depth / 40].
+    #[arg(long, value_parser = positive)]
+    spacing: Option<f32>,
+    /// Simulated time, s.
+    #[arg(long, default_value_t = 1.0)]
+    duration: f64,
+    /// Time between frames, s.
+    #[arg(long, default_value_t = 0.01)]
+    every: f64,
+    /// Jitter (or galaxy) seed.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Output file.
+    #[arg(long, default_value = "headless.csv")]
+    out: String,
+    /// Spawn jitter, fraction of the spacing (0 to 0.45).
+    #[arg(long, default_value_t = FluidBlock::DEFAULT_JITTER)]
+    jitter: f32,
+    /// Pressure solver.
+    #[arg(long, value_enum, default_value_t = Solver::Dfsph)]
+    solver: Solver,
+    /// Kernel support / spacing [default: 3 for wcsph, 2 for dfsph].
+    #[arg(long, value_parser = positive)]
+    support_ratio: Option<f32>,
+    /// Smoothing kernel.
+    #[arg(long, value_enum, default_value_t = Kernel::Wendland)]
+    kernel: Kernel,
+    /// Speed of sound, m/s [default: 20 sqrt(g * fluid height)].
+    #[arg(long, value_parser = positive)]
+    speed_of_sound: Option<f32>,
+    /// Kinematic viscosity, m²/s.
+    #[arg(long, default_value_t = 1.0e-6)]
+    viscosity: f32,
+    /// Artificial viscosity.
+    #[arg(long, default_value_t = 0.02)]
+    alpha: f32,
+    /// Compute threads [default: all cores].
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Galaxy: bodies, the central one included.
+    #[arg(long, default_value_t = 20_000)]
+    bodies: usize,
+    /// Galaxy: Barnes-Hut opening angle.
+    #[arg(long, default_value_t = 0.7)]
+    theta: f32,
+    /// Galaxy: fixed steps of --dt seconds.
+    #[arg(long, default_value_t = 100)]
+    steps: usize,
+    /// Galaxy: step, s.
+    #[arg(long, default_value_t = 0.002)]
+    dt: f64,
+    /// Galaxy: steps between frames [default: --steps, so the first and last frame].
+    #[arg(long)]
+    frame_steps: Option<usize>,
+    /// Galaxy: softening, m.
+    #[arg(long, default_value_t = 0.01)]
+    softening: f32,
+}
 
-const VALUED: &[&str] = &[
-    "solver",
-    "scenario",
-    "column-width",
-    "column-height",
-    "tank-width",
-    "tank-height",
-    "depth",
-    "spacing",
-    "duration",
-    "every",
-    "seed",
-    "out",
-    "jitter",
-    "support-ratio",
-    "kernel",
-    "speed-of-sound",
-    "viscosity",
-    "alpha",
-    "threads",
-    "bodies",
-    "theta",
-    "steps",
-    "dt",
-    "frame-steps",
-    "softening",
-];
+/// What the recorder simulates.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum Scenario {
+    /// A water column collapsing in a tank.
+    DamBreak,
+    /// A resting layer.
+    Tank,
+    /// Barnes-Hut gravity on a disc of bodies around a heavy centre (G = 1, radius 1 m).
+    Galaxy,
+}
+
+/// The fluid's pressure solver.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum Solver {
+    /// Incompressible (divergence-free SPH).
+    Dfsph,
+    /// Weakly compressible.
+    Wcsph,
+}
+
+/// The smoothing kernel.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum Kernel {
+    Wendland,
+    Cubic,
+    Muller,
+}
+
+/// A finite positive number.
+fn positive(text: &str) -> Result<f32, String> {
+    let value: f32 = text
+        .parse()
+        .map_err(|_| format!("cannot read '{text}' as a number"))?;
+    if value.is_finite() && value > 0.0 {
+        Ok(value)
+    } else {
+        Err(format!("must be a positive number, got {value}"))
+    }
+}
+
+/// Exits with `message`, the usage and status 2, as for any other bad argument.
+fn refuse(message: impl std::fmt::Display) -> ! {
+    Cli::command()
+        .error(ErrorKind::ValueValidation, message)
+        .exit()
+}
+
+/// A progress bar of `len` steps on stderr (drawn only when stderr is a terminal).
+fn progress(len: u64, unit: &str) -> ProgressBar {
+    let bar = ProgressBar::new(len);
+    let template = format!("{{bar:40}} {{pos}}/{{len}} {unit} ({{elapsed}}, {{eta}} left)");
+    if let Ok(style) = ProgressStyle::with_template(&template) {
+        bar.set_style(style);
+    }
+    bar
+}
 
 struct Config {
     params: SphParams,
@@ -89,25 +172,25 @@ struct Config {
     threads: usize,
 }
 
-fn configure(args: &Args) -> Result<Config, String> {
-    let scenario = args.text("scenario").unwrap_or("dam-break");
-    let tank = Tank::new(
-        args.positive("tank-width", 0.8)?,
-        args.positive("tank-height", 0.4)?,
-    );
-    let (block, height, default_spacing) = match scenario {
-        "dam-break" => {
-            let (w, h) = (
-                args.positive("column-width", 0.1)?,
-                args.positive("column-height", 0.2)?,
-            );
+fn threads(cli: &Cli) -> usize {
+    cli.threads
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
+        .max(1)
+}
+
+fn configure(cli: &Cli) -> Result<Config, String> {
+    let tank = Tank::new(cli.tank_width, cli.tank_height);
+    let (block, height, default_spacing) = match cli.scenario {
+        Scenario::DamBreak => {
+            let (w, h) = (cli.column_width, cli.column_height);
             if w > tank.width || h > tank.height {
                 return Err(format!("the {w} m × {h} m column does not fit the tank"));
             }
             (FluidBlock::dam_break(w, h), h, w / 40.0)
         }
-        "tank" => {
-            let depth = args.positive("depth", 0.2)?;
+        Scenario::Galaxy => return Err("the galaxy scenario has no fluid".into()),
+        Scenario::Tank => {
+            let depth = cli.depth;
             if depth > tank.height {
                 return Err(format!(
                     "depth {depth} m exceeds the tank height {} m",
@@ -116,75 +199,68 @@ fn configure(args: &Args) -> Result<Config, String> {
             }
             (FluidBlock::resting_layer(&tank, depth), depth, depth / 40.0)
         }
-        other => return Err(format!("unknown scenario '{other}' (dam-break or tank)")),
     };
-    let kernel = match args.text("kernel").unwrap_or("wendland") {
-        "wendland" => KernelKind::WendlandC2,
-        "cubic" => KernelKind::CubicSpline,
-        "muller" => KernelKind::Muller,
-        other => return Err(format!("unknown kernel '{other}'")),
+    let kernel = match cli.kernel {
+        Kernel::Wendland => KernelKind::WendlandC2,
+        Kernel::Cubic => KernelKind::CubicSpline,
+        Kernel::Muller => KernelKind::Muller,
     };
-    let (solver, default_ratio) = match args.text("solver").unwrap_or("dfsph") {
-        "wcsph" => (PressureSolver::Wcsph, 3.0),
-        "dfsph" => (PressureSolver::Dfsph, 2.0),
-        other => return Err(format!("unknown solver '{other}' (wcsph or dfsph)")),
+    let (solver, default_ratio) = match cli.solver {
+        Solver::Wcsph => (PressureSolver::Wcsph, 3.0),
+        Solver::Dfsph => (PressureSolver::Dfsph, 2.0),
     };
     let params = SphParams {
-        particle_spacing: args.positive("spacing", default_spacing)?,
-        support_ratio: args.positive("support-ratio", default_ratio)?,
+        particle_spacing: cli.spacing.unwrap_or(default_spacing),
+        support_ratio: cli.support_ratio.unwrap_or(default_ratio),
         solver,
         kernel,
-        speed_of_sound: args.positive(
-            "speed-of-sound",
-            SphParams::speed_of_sound_for_height(height),
-        )?,
-        kinematic_viscosity: args.get("viscosity", 1.0e-6)?,
-        artificial_viscosity: args.get("alpha", 0.02)?,
+        speed_of_sound: cli
+            .speed_of_sound
+            .unwrap_or_else(|| SphParams::speed_of_sound_for_height(height)),
+        kinematic_viscosity: cli.viscosity,
+        artificial_viscosity: cli.alpha,
         tank: Some(tank),
         max_substeps: 100_000,
         ..default()
     };
     params.validate().map_err(|e| e.to_string())?;
-    let jitter: f32 = args.get("jitter", FluidBlock::DEFAULT_JITTER)?;
-    if !(0.0..=0.45).contains(&jitter) {
-        return Err(format!("--jitter must be within 0..=0.45, got {jitter}"));
+    if !(0.0..=0.45).contains(&cli.jitter) {
+        return Err(format!(
+            "--jitter must be within 0..=0.45, got {}",
+            cli.jitter
+        ));
     }
-    if block.lattice_size(params.particle_spacing).0 == 0
-        || block.lattice_size(params.particle_spacing).1 == 0
-    {
+    let (columns, rows) = block.lattice_size(params.particle_spacing);
+    if columns == 0 || rows == 0 {
         return Err("the spacing is larger than the fluid block: no particles".into());
     }
-    let duration: f64 = args.get("duration", 1.0)?;
-    let every: f64 = args.get("every", 0.01)?;
-    if !(duration.is_finite() && duration >= 0.0 && every.is_finite() && every > 0.0) {
+    if !(cli.duration.is_finite()
+        && cli.duration >= 0.0
+        && cli.every.is_finite()
+        && cli.every > 0.0)
+    {
         return Err("--duration must be non-negative and --every positive".into());
     }
-    let threads: usize = args.get(
-        "threads",
-        std::thread::available_parallelism().map_or(1, |n| n.get()),
-    )?;
     Ok(Config {
         params,
-        block: block.with_jitter(jitter).with_seed(args.get("seed", 0)?),
-        duration,
-        every,
-        out: args.text("out").unwrap_or("headless.csv").to_string(),
-        threads: threads.max(1),
+        block: block.with_jitter(cli.jitter).with_seed(cli.seed),
+        duration: cli.duration,
+        every: cli.every,
+        out: cli.out.clone(),
+        threads: threads(cli),
     })
 }
 
 fn main() {
-    let args = Args::parse(VALUED, &[]).unwrap_or_else(|e| fail(&e, USAGE));
-    if args.text("scenario") == Some("galaxy") {
-        let galaxy = configure_galaxy(&args).unwrap_or_else(|e| fail(&e, USAGE));
-        if let Err(e) = record_galaxy(&galaxy) {
-            eprintln!("error: {e}");
-            std::process::exit(1);
-        }
-        return;
-    }
-    let config = configure(&args).unwrap_or_else(|e| fail(&e, USAGE));
-    if let Err(e) = record(&config) {
+    let cli = Cli::parse();
+    let result = if cli.scenario == Scenario::Galaxy {
+        let galaxy = configure_galaxy(&cli).unwrap_or_else(|e| refuse(e));
+        record_galaxy(&galaxy)
+    } else {
+        let config = configure(&cli).unwrap_or_else(|e| refuse(e));
+        record(&config)
+    };
+    if let Err(e) = result {
         eprintln!("error: {e}");
         std::process::exit(1);
     }
@@ -210,12 +286,14 @@ fn record(config: &Config) -> std::io::Result<()> {
     let mass = config.params.particle_mass();
     let frames = (config.duration / config.every + 1e-9).floor() as u64;
     let started = std::time::Instant::now();
+    let bar = progress(frames + 1, "frames");
     for frame in 0..=frames {
         if frame > 0 {
             for _ in 0..ticks_per_frame {
                 app.update();
             }
         }
+        bar.inc(1);
         let world = app.world_mut();
         let time = world.resource::<SphSolver>().clock().time;
         let mut query = world.query::<(&Position, &Velocity, &Acceleration, &Density, &Pressure)>();
@@ -231,6 +309,7 @@ fn record(config: &Config) -> std::io::Result<()> {
         }
     }
     out.flush()?;
+    bar.finish_and_clear();
     let stats = app.world().resource::<SphStats>();
     eprintln!(
         "{} particles, {} frames to {:.3} s in {:.1} s wall time -> {}",
@@ -253,36 +332,28 @@ struct GalaxyConfig {
     threads: usize,
 }
 
-fn configure_galaxy(args: &Args) -> Result<GalaxyConfig, String> {
-    let bodies: usize = args.get("bodies", 20_000)?;
-    let steps: usize = args.get("steps", 100)?;
-    let dt: f64 = args.get("dt", 0.002)?;
-    if bodies == 0 || !(dt.is_finite() && dt > 0.0) {
+fn configure_galaxy(cli: &Cli) -> Result<GalaxyConfig, String> {
+    if cli.bodies == 0 || !(cli.dt.is_finite() && cli.dt > 0.0) {
         return Err("--bodies and --dt must be positive".into());
     }
-    let frame_steps: usize = args.get("frame-steps", steps.max(1))?;
     let params = GravityParams {
         gravitational_constant: 1.0,
-        theta: args.get("theta", 0.7)?,
-        softening: args.get("softening", 0.01)?,
+        theta: cli.theta,
+        softening: cli.softening,
         ..default()
     };
     params.validate().map_err(|e| e.to_string())?;
-    let threads: usize = args.get(
-        "threads",
-        std::thread::available_parallelism().map_or(1, |n| n.get()),
-    )?;
     Ok(GalaxyConfig {
         disc: GalaxyDisc {
-            seed: args.get("seed", 0)?,
-            ..GalaxyDisc::new(bodies)
+            seed: cli.seed,
+            ..GalaxyDisc::new(cli.bodies)
         },
         params,
-        steps,
-        dt,
-        frame_steps: frame_steps.max(1),
-        out: args.text("out").unwrap_or("headless.csv").to_string(),
-        threads: threads.max(1),
+        steps: cli.steps,
+        dt: cli.dt,
+        frame_steps: cli.frame_steps.unwrap_or(cli.steps).max(1),
+        out: cli.out.clone(),
+        threads: threads(cli),
     })
 }
 
@@ -334,13 +405,16 @@ fn record_galaxy(config: &GalaxyConfig) -> std::io::Result<()> {
     // Step 0 carries the field at the start, evaluated without moving anything.
     bevy_sph2d::gravity::refresh_gravity_field(app.world_mut());
     write_frame(&mut app, 0)?;
+    let bar = progress(config.steps as u64, "steps");
     for step in 1..=config.steps {
         app.update();
+        bar.inc(1);
         if step % config.frame_steps == 0 || step == config.steps {
             write_frame(&mut app, step)?;
         }
     }
     out.flush()?;
+    bar.finish_and_clear();
     let stats = app.world().resource::<GravityStats>();
     eprintln!(
         "{} bodies, {} steps of {} s in {:.1} s wall time, energy {:.6e} J -> {}",
