@@ -43,7 +43,7 @@
 //! lattice correction [`SphConstants::gradient_scale`], which makes the discrete gradient of a
 //! linear field exact at rest, so hydrostatic pressure rises at `ρ₀g`.
 //!
-//! Sums over particles are taken in f64 chunk by chunk of fixed size ([`CHUNK`](super::parallel::CHUNK)), so the
+//! Sums over particles are taken in f64 chunk by chunk of fixed size ([`CHUNK`]), so the
 //! iteration count, and with it every result, is the same on any number of threads.
 //!
 //! See [`SphPlugin`](crate::fluid::SphPlugin).

@@ -9,9 +9,12 @@ pub mod kernels;
 pub mod layout;
 pub mod parallel;
 pub mod params;
+pub mod region;
 pub mod scenario;
+pub mod sensors;
 pub mod slices;
 pub mod solver;
+pub mod sources;
 pub mod spawn;
 pub mod systems;
 pub mod validation;
@@ -30,7 +33,10 @@ pub use components::{
 };
 pub use kernels::KernelKind;
 pub use params::{DfsphSettings, PressureSolver, SphParams, SphParamsError};
+pub use region::FluidRegion;
 pub use scenario::{ScenarioKind, SphScenario};
+pub use sensors::{FluidEntered, FluidLeft, FluidSample, FluidSensor, SensorReading, probe};
+pub use sources::{EmitterRate, FluidDrain, FluidEmitter};
 pub use spawn::FluidBlock;
 pub use systems::{SphParamsStatus, SphSolver, SphStats, refresh_fluid_state};
 
@@ -62,7 +68,8 @@ pub use systems::{SphParamsStatus, SphSolver, SphStats, refresh_fluid_state};
 ///    5. [`SphSubstepSystems::Integrate`]: choose the step; DFSPH solves for the pressure that
 ///       keeps the density at rest under all the accelerations above; advance
 ///       (`par_iter_mut`), keep particles in the tank and out of obstacles.
-/// 3. [`SphSystems::Finish`]: fill [`SphStats`].
+/// 3. [`SphSystems::Finish`]: [`FluidEmitter`]s pour, [`FluidDrain`]s remove, [`FluidSensor`]s
+///    measure (and send [`FluidEntered`] and [`FluidLeft`]), then fill [`SphStats`].
 ///
 /// The passes over neighbours run by sorted slot in parallel regions on a rayon pool of as many
 /// threads as Bevy's `ComputeTaskPool` (whose threads would sleep between passes); the grid and
@@ -117,7 +124,7 @@ pub enum SphSystems {
     Prepare,
     /// All sub-steps of this tick (runs [`SphSubstep`]).
     Simulate,
-    /// Statistics.
+    /// Emitters, drains and sensors, then statistics.
     Finish,
 }
 
@@ -165,6 +172,11 @@ impl Plugin for SphPlugin {
             .register_type::<Stiffness>()
             .register_type::<NeighborSlot>()
             .register_type::<Obstacle>()
+            .register_type::<FluidEmitter>()
+            .register_type::<FluidDrain>()
+            .register_type::<FluidSensor>()
+            .add_message::<FluidEntered>()
+            .add_message::<FluidLeft>()
             .insert_resource(self.params.clone())
             .init_resource::<SphSolver>()
             .init_resource::<SphStats>()
@@ -241,7 +253,14 @@ impl Plugin for SphPlugin {
                 systems::run_substeps
                     .run_if(simulation_running)
                     .in_set(SphSystems::Simulate),
-                systems::update_stats.in_set(SphSystems::Finish),
+                (
+                    sources::run_emitters,
+                    sources::run_drains,
+                    sensors::run_sensors,
+                    systems::update_stats,
+                )
+                    .chain()
+                    .in_set(SphSystems::Finish),
             ),
         );
     }

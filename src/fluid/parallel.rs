@@ -44,7 +44,7 @@ impl Parallel for Rayon {
     }
 }
 
-/// Slots per parallel task of [`for_each_slot`], fixed (not from the thread count) so that sums
+/// Slots per parallel task of the slot passes, fixed (not from the thread count) so that sums
 /// over slots add up in the same order on any number of threads. Measured with the `bench`
 /// example, the demo's DFSPH dam break at 2,500 particles on two threads: 1.37x real time with
 /// 256, 1.22x with 512.

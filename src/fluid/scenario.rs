@@ -5,6 +5,8 @@
 use super::boundary::Tank;
 use super::components::FluidParticle;
 use super::params::SphParams;
+use super::region::FluidRegion;
+use super::sources::{EmitterRate, FluidDrain, FluidEmitter};
 use super::spawn::FluidBlock;
 use crate::control::ResetSimulation;
 use bevy::prelude::*;
@@ -22,17 +24,21 @@ pub enum ScenarioKind {
     DropIntoPool,
     /// A resting layer 0.4 of the tank deep, to tilt and stir.
     Tank,
+    /// A pool a quarter of the tank deep fed by a nozzle high on the left wall, with an overflow
+    /// drain at the right wall that keeps its level ([`FluidEmitter`], [`FluidDrain`]).
+    Fountain,
     /// No fluid (for scenes of gravity bodies alone).
     Empty,
 }
 
 impl ScenarioKind {
     /// Every kind, in menu order.
-    pub const ALL: [ScenarioKind; 5] = [
+    pub const ALL: [ScenarioKind; 6] = [
         ScenarioKind::DamBreak,
         ScenarioKind::DoubleDamBreak,
         ScenarioKind::DropIntoPool,
         ScenarioKind::Tank,
+        ScenarioKind::Fountain,
         ScenarioKind::Empty,
     ];
 
@@ -43,6 +49,7 @@ impl ScenarioKind {
             ScenarioKind::DoubleDamBreak => "Double dam break",
             ScenarioKind::DropIntoPool => "Drop into a pool",
             ScenarioKind::Tank => "Tank",
+            ScenarioKind::Fountain => "Fountain",
             ScenarioKind::Empty => "No fluid",
         }
     }
@@ -113,6 +120,7 @@ impl SphScenario {
                 ]
             }
             ScenarioKind::Tank => vec![block(0.0, 0.0, 1.0, 0.4)],
+            ScenarioKind::Fountain => vec![block(0.0, 0.0, 1.0, 0.25)],
             ScenarioKind::Empty => Vec::new(),
         };
         blocks
@@ -120,6 +128,31 @@ impl SphScenario {
             .enumerate()
             .map(|(i, b)| b.with_seed(self.seed.wrapping_add(i as u64)))
             .collect()
+    }
+
+    /// The emitters (with their nozzle positions) and drains of the scenario in `tank`.
+    pub fn sources(&self, tank: &Tank) -> (Vec<(FluidEmitter, Vec2)>, Vec<FluidDrain>) {
+        let (w, h) = (tank.width, tank.height);
+        match self.kind {
+            ScenarioKind::Fountain => (
+                vec![(
+                    // A nearly full jet: 80% of what the nozzle passes at its speed.
+                    FluidEmitter::new(
+                        0.03 * h,
+                        Vec2::new(1.0, 0.35),
+                        1.6,
+                        EmitterRate::Volume(0.8 * 0.03 * h * 1.6),
+                    ),
+                    Vec2::new(0.04 * w, 0.6 * h),
+                )],
+                // An overflow just above the pool's level at the right wall.
+                vec![FluidDrain::new(FluidRegion::Box {
+                    min: Vec2::new(0.92 * w, 0.27 * h),
+                    max: Vec2::new(w, 0.4 * h),
+                })],
+            ),
+            _ => (Vec::new(), Vec::new()),
+        }
     }
 
     /// The spacing (m) at which the blocks in `tank` hold about [`particles`](Self::particles).
@@ -137,13 +170,22 @@ impl SphScenario {
     }
 }
 
-/// Despawns every fluid particle and spawns the [`SphScenario`] anew, at the spacing that gives
-/// its particle count, when a [`ResetSimulation`] arrives.
+/// Marks the emitters and drains a scenario spawned: the next reset removes them.
+#[derive(Component, Reflect, Debug, Clone, Copy, Default, PartialEq)]
+#[reflect(Component, Default, Debug)]
+pub struct ScenarioSource;
+
+/// What a reset removes: fluid particles and the scenario's sources.
+type ScenarioOwned = Or<(With<FluidParticle>, With<ScenarioSource>)>;
+
+/// Despawns every fluid particle (and the scenario's own emitters and drains) and spawns the
+/// [`SphScenario`] anew, at the spacing that gives its particle count, when a
+/// [`ResetSimulation`] arrives.
 pub(crate) fn reset_scenario(
     mut resets: MessageReader<ResetSimulation>,
     scenario: Option<Res<SphScenario>>,
     mut params: ResMut<SphParams>,
-    particles: Query<Entity, With<FluidParticle>>,
+    particles: Query<Entity, ScenarioOwned>,
     mut commands: Commands,
 ) {
     if resets.read().count() == 0 {
@@ -171,6 +213,17 @@ pub(crate) fn reset_scenario(
     }
     for block in scenario.blocks(&tank) {
         commands.queue(block);
+    }
+    let (emitters, drains) = scenario.sources(&tank);
+    for (emitter, at) in emitters {
+        commands.spawn((
+            emitter,
+            Transform::from_translation(at.extend(0.0)),
+            ScenarioSource,
+        ));
+    }
+    for drain in drains {
+        commands.spawn((drain, ScenarioSource));
     }
     commands.queue(|world: &mut World| {
         world

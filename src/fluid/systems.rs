@@ -136,6 +136,11 @@ impl SphSolver {
         &self.iterations
     }
 
+    /// The divergence-free solver's state of the last sub-step.
+    pub(crate) fn dfsph(&self) -> &Dfsph {
+        &self.dfsph
+    }
+
     /// What the last DFSPH sub-step's solves did.
     pub fn dfsph_report(&self) -> &super::dfsph::DfsphReport {
         &self.dfsph.report

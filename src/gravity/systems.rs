@@ -1,5 +1,5 @@
 //! The gravity plugin's ECS systems: thin glue that gathers bodies into the
-//! [`QuadTree`](super::quadtree::QuadTree), evaluates it from `par_iter_mut`, and integrates
+//! [`QuadTree`], evaluates it from `par_iter_mut`, and integrates
 //! gravity-only bodies with kick-drift-kick leapfrog. See
 //! [`GravityPlugin`](crate::gravity::GravityPlugin).
 
