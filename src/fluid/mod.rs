@@ -10,6 +10,7 @@ pub mod layout;
 pub mod parallel;
 pub mod params;
 pub mod region;
+pub mod save;
 pub mod scenario;
 pub mod sensors;
 pub mod slices;
@@ -34,6 +35,10 @@ pub use components::{
 pub use kernels::KernelKind;
 pub use params::{DfsphSettings, PressureSolver, SphParams, SphParamsError};
 pub use region::FluidRegion;
+pub use save::{
+    LoadSlot, SaveSlot, SnapshotError, SnapshotSlot, load_fluid, load_fluid_from, save_fluid,
+    save_fluid_to,
+};
 pub use scenario::{ScenarioKind, SphScenario};
 pub use sensors::{FluidEntered, FluidLeft, FluidSample, FluidSensor, SensorReading, probe};
 pub use sources::{EmitterRate, FluidDrain, FluidEmitter};
@@ -180,7 +185,8 @@ impl Plugin for SphPlugin {
             .insert_resource(self.params.clone())
             .init_resource::<SphSolver>()
             .init_resource::<SphStats>()
-            .init_resource::<SphParamsStatus>();
+            .init_resource::<SphParamsStatus>()
+            .init_resource::<SnapshotSlot>();
 
         // Edited rather than replaced: other plugins (gravity) may have added systems to it.
         app.init_schedule(SphSubstep);

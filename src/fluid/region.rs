@@ -90,7 +90,7 @@ mod tests {
         assert!((disc.area() - core::f32::consts::FRAC_PI_4).abs() < 1e-5);
         let rect = FluidRegion::rect(Vec2::ZERO, Vec2::new(1.0, 0.5));
         assert!(rect.contains(Vec2::new(-1.0, 0.5)) && !rect.contains(Vec2::new(0.0, 0.6)));
-        assert_eq!(rect.area(), 1.0);
+        assert_eq!(rect.area(), 2.0);
         assert!(disc.check().is_ok() && rect.check().is_ok());
         assert!(FluidRegion::circle(Vec2::ZERO, 0.0).check().is_err());
         assert!(FluidRegion::circle(Vec2::NAN, 1.0).check().is_err());

@@ -159,6 +159,11 @@ impl SphSolver {
         (slot.generation == self.generation && index < self.snapshot.len()).then_some(index)
     }
 
+    /// Puts the clock where a saved run left it (see [`load_fluid`](super::load_fluid)).
+    pub(crate) fn restore_clock(&mut self, clock: SubstepClock) {
+        self.clock = clock;
+    }
+
     /// Starts simulated time again from zero (after a reset).
     pub fn restart_clock(&mut self) {
         self.clock = SubstepClock::default();

@@ -6,8 +6,8 @@ pub mod tools;
 
 use crate::control::{ResetSimulation, SimulationControl, simulation_running};
 use crate::fluid::{
-    Acceleration, FluidParticle, Position, SphParams, SphSubstep, SphSubstepSystems, SphSystems,
-    Velocity,
+    Acceleration, FluidParticle, LoadSlot, Position, SaveSlot, SphParams, SphSubstep,
+    SphSubstepSystems, SphSystems, Velocity,
 };
 use crate::gravity::{GravityAcceleration, GravitySystems, Mass};
 use crate::render::{ParticleDraw, ParticleView, SphCamera, cursor_to_world};
@@ -24,7 +24,8 @@ pub use tools::{PointerAction, PointerForce, falloff, nozzle_row, tilted_gravity
 /// changes the radius. The tool's circle is drawn with gizmos.
 ///
 /// Keyboard: `Space` pauses, `.` runs a single tick, `R` resets the scenario, `L` switches
-/// between the liquid and the particles ([`ParticleView::draw`]), `←`/`→` tilt the tank (turn
+/// between the liquid and the particles ([`ParticleView::draw`]), `F5` saves the fluid into the
+/// [`SnapshotSlot`](crate::fluid::SnapshotSlot) and `F9` loads it, `←`/`→` tilt the tank (turn
 /// gravity), `↑` levels it, `1`–`5` pick the tool.
 ///
 /// The cursor is read each frame before the fixed steps
@@ -398,7 +399,7 @@ fn push_bodies(
         });
 }
 
-/// Space, `.`, `R`, `L`, arrows and `1`–`5`.
+/// Space, `.`, `R`, `L`, `F5`/`F9`, arrows and `1`–`5`.
 #[allow(clippy::too_many_arguments)]
 fn keyboard_controls(
     keys: Res<ButtonInput<KeyCode>>,
@@ -409,6 +410,7 @@ fn keyboard_controls(
     mut control: ResMut<SimulationControl>,
     mut params: ResMut<SphParams>,
     mut resets: MessageWriter<ResetSimulation>,
+    mut commands: Commands,
 ) {
     if pointer.ui_has_keyboard {
         return;
@@ -421,6 +423,12 @@ fn keyboard_controls(
     }
     if keys.just_pressed(KeyCode::KeyR) {
         resets.write(ResetSimulation);
+    }
+    if keys.just_pressed(KeyCode::F5) {
+        commands.queue(SaveSlot);
+    }
+    if keys.just_pressed(KeyCode::F9) {
+        commands.queue(LoadSlot);
     }
     if keys.just_pressed(KeyCode::KeyL)
         && let Some(mut view) = view

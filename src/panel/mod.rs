@@ -5,7 +5,8 @@ mod widgets;
 
 use crate::control::{ResetSimulation, SimulationControl};
 use crate::fluid::{
-    KernelKind, PressureSolver, ScenarioKind, SphParams, SphParamsStatus, SphScenario, SphStats,
+    KernelKind, LoadSlot, PressureSolver, SaveSlot, ScenarioKind, SnapshotSlot, SphParams,
+    SphParamsStatus, SphScenario, SphStats,
 };
 use crate::gravity::{GravityParams, GravityStats};
 use crate::interact::{Pointer, PointerSettings, PointerTool};
@@ -40,6 +41,7 @@ impl Plugin for SphPanelPlugin {
             .init_resource::<SphScenario>()
             .init_resource::<ParticleView>()
             .init_resource::<LiquidStyle>()
+            .init_resource::<SnapshotSlot>()
             .init_resource::<PointerSettings>()
             .init_resource::<Pointer>()
             .init_resource::<ViewInsets>()
@@ -137,12 +139,14 @@ struct PanelData<'w> {
     gravity_stats: Option<Res<'w, GravityStats>>,
     bodies: Option<ResMut<'w, BodyView>>,
     liquid: ResMut<'w, LiquidStyle>,
+    slot: Res<'w, SnapshotSlot>,
 }
 
 fn panel(
     mut contexts: EguiContexts,
     mut data: PanelData,
     mut resets: MessageWriter<ResetSimulation>,
+    mut commands: Commands,
 ) -> Result {
     let ctx = contexts.ctx_mut()?;
     if data.keys.just_pressed(KeyCode::Tab) && !ctx.egui_wants_keyboard_input() {
@@ -170,7 +174,7 @@ fn panel(
                 // What the scene has comes first and open; the fluid's sections start folded
                 // in a scene without fluid (the galaxy).
                 let fluid = has_fluid(&data);
-                controls_section(ui, &mut data, &mut resets);
+                controls_section(ui, &mut data, &mut resets, &mut commands);
                 stats_section(ui, &data, &stats, fluid);
                 if !fluid {
                     gravity_section(ui, &mut data);
@@ -198,6 +202,7 @@ fn controls_section(
     ui: &mut egui::Ui,
     data: &mut PanelData,
     resets: &mut MessageWriter<ResetSimulation>,
+    commands: &mut Commands,
 ) {
     ui.heading("bevy_sph2d");
     ui.horizontal(|ui| {
@@ -219,8 +224,31 @@ fn controls_section(
         if ui.button("⟲ Reset").on_hover_text("R").clicked() {
             resets.write(ResetSimulation);
         }
+        if ui
+            .button("Save")
+            .on_hover_text("F5: the fluid into the slot file")
+            .clicked()
+        {
+            commands.queue(SaveSlot);
+        }
+        if ui
+            .button("Load")
+            .on_hover_text("F9: the fluid from the slot file")
+            .clicked()
+        {
+            commands.queue(LoadSlot);
+        }
     });
-    ui.small("Mouse: left = tool, right = push, wheel = radius. Left/Right arrows tilt, Up levels, 1–5 tools, L liquid/particles, Tab hides the panel.");
+    match &data.slot.status {
+        Some(Ok(message)) => {
+            ui.small(message);
+        }
+        Some(Err(message)) => {
+            ui.colored_label(egui::Color32::LIGHT_RED, message);
+        }
+        None => {}
+    }
+    ui.small("Mouse: left = tool, right = push, wheel = radius. Left/Right arrows tilt, Up levels, 1–5 tools, L liquid/particles, F5/F9 save/load, Tab hides the panel.");
 }
 
 /// Whether the scene has fluid: a scenario that spawns some, or particles.
