@@ -271,3 +271,35 @@ fn bad_emitters_drains_and_sensors_change_nothing() {
     assert_eq!(sensor.reading, Default::default());
     assert!(sensor.check().is_err());
 }
+
+#[test]
+fn the_guard_removes_a_poisoned_particle_and_the_rest_stays_finite() {
+    let mut app = resting_layer();
+    let before = particles(&mut app);
+    let world = app.world_mut();
+    let mut query = world.query_filtered::<(
+        &mut bevy_sph2d::fluid::Position,
+        &mut bevy_sph2d::fluid::Velocity,
+    ), With<FluidParticle>>();
+    let mut poisoned = 0;
+    for (i, (mut position, mut velocity)) in query.iter_mut(world).enumerate() {
+        match i {
+            100 => velocity.0 = Vec2::new(f32::NAN, 0.0),
+            200 => position.0 = Vec2::new(0.5, f32::INFINITY),
+            300 => position.0 = Vec2::new(5.0, 0.1),
+            _ => continue,
+        }
+        poisoned += 1;
+    }
+    assert_eq!(poisoned, 3);
+    run(&mut app, 30);
+    assert_eq!(particles(&mut app), before - 3);
+    let stats = app.world().resource::<SphStats>();
+    assert_eq!((stats.removed_non_finite, stats.removed_escaped), (2, 1));
+    let states = common::states(&mut app);
+    assert!(common::all_finite(&states));
+    assert!(
+        states.iter().all(|s| s.velocity.length() < 0.5),
+        "the layer stays at rest"
+    );
+}

@@ -56,7 +56,8 @@ pub use systems::{SphParamsStatus, SphSolver, SphStats, refresh_fluid_state};
 /// In the plugin's schedule, in order ([`SphSystems`]):
 /// 1. [`SphSystems::Prepare`]: respawn the [`SphScenario`] on
 ///    [`ResetSimulation`](crate::control::ResetSimulation), validate changed [`SphParams`],
-///    re-sample walls and obstacles.
+///    remove particles whose state is not finite or that a game put outside the tank (the
+///    stability guard, counted in [`SphStats`]), re-sample walls and obstacles.
 /// 2. [`SphSystems::Simulate`] (skipped while
 ///    [`SimulationControl`](crate::control::SimulationControl) pauses): split the tick into stable sub-steps and run the [`SphSubstep`]
 ///    schedule once per sub-step. In it, in order ([`SphSubstepSystems`]):
@@ -251,7 +252,7 @@ impl Plugin for SphPlugin {
                 (
                     scenario::reset_scenario,
                     systems::apply_params,
-                    systems::reject_invalid_particles,
+                    systems::guard_particles,
                     systems::rebuild_walls,
                 )
                     .chain()

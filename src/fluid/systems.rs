@@ -79,6 +79,9 @@ pub struct SphSolver {
     /// Counts snapshot rebuilds; [`NeighborSlot`]s carry the one they were assigned in.
     generation: u32,
     non_finite: u64,
+    /// Particles the guard removed for a non-finite state, and for leaving the tank.
+    removed_non_finite: u64,
+    removed_escaped: u64,
 }
 
 impl Default for SphSolver {
@@ -108,6 +111,8 @@ impl SphSolver {
             iterations: SolverIterations::default(),
             generation: 0,
             non_finite: 0,
+            removed_non_finite: 0,
+            removed_escaped: 0,
         }
     }
 
@@ -220,6 +225,14 @@ pub struct SphStats {
     /// Particle updates that would have produced a non-finite value and were held back (should
     /// stay zero).
     pub non_finite_resets: u64,
+    /// Particles the stability guard removed because their state was not finite (since
+    /// start-up; should stay zero).
+    pub removed_non_finite: u64,
+    /// Particles the guard removed because they were outside the tank (since start-up).
+    pub removed_escaped: u64,
+    /// Whether the last tick needed more sub-steps than `max_substeps` allows, so the fluid ran
+    /// in slow motion (see `dropped_time`).
+    pub slow_motion: bool,
     /// The pressure solver in use.
     pub solver: PressureSolver,
     /// DFSPH density-solve iterations in the last tick (all its sub-steps).
@@ -263,21 +276,52 @@ pub(crate) fn apply_params(
     }
 }
 
-/// Despawns particles spawned at a non-finite position (with a warning): they could never take
-/// part in the flow.
-pub(crate) fn reject_invalid_particles(
+/// The stability guard, before each tick's sub-steps: despawns every particle whose position or
+/// velocity is not finite, or that lies outside the tank by more than a spacing (a game's own
+/// system put it there), with a warning naming the cause, and counts them in [`SphStats`], so
+/// one bad particle never reaches its neighbours' sums. The solver itself never produces such a
+/// particle (it holds back an update that would), so this changes nothing in a stable run.
+pub(crate) fn guard_particles(
     mut commands: Commands,
-    added: Query<(Entity, &Position, &Velocity), Added<FluidParticle>>,
+    mut solver: ResMut<SphSolver>,
+    particles: Query<(Entity, &Position, &Velocity), With<FluidParticle>>,
 ) {
-    for (entity, position, velocity) in &added {
-        if !position.is_finite() || !velocity.is_finite() {
+    let c = solver.constants;
+    let margin = c.spacing;
+    let (mut non_finite, mut escaped) = (0u64, 0u64);
+    for (entity, position, velocity) in &particles {
+        let cause = if !position.is_finite() || !velocity.is_finite() {
+            non_finite += 1;
+            "not finite"
+        } else if c.tank.is_some_and(|tank| {
+            let p = position.0;
+            p.x < -margin
+                || p.y < -margin
+                || p.x > tank.width + margin
+                || p.y > tank.height + margin
+        }) {
+            escaped += 1;
+            "outside the tank"
+        } else {
+            continue;
+        };
+        if non_finite + escaped <= 3 {
             warn!(
-                "fluid particle {entity} spawned at position {} with velocity {}: not finite, \
-                 despawned",
+                "fluid particle {entity} at position {} with velocity {}: {cause}, removed",
                 position.0, velocity.0
             );
-            commands.entity(entity).despawn();
         }
+        commands.entity(entity).despawn();
+    }
+    if non_finite + escaped > 3 {
+        warn!(
+            "{} more fluid particles removed this tick",
+            non_finite + escaped - 3
+        );
+    }
+    if non_finite + escaped > 0 {
+        solver.removed_non_finite += non_finite;
+        solver.removed_escaped += escaped;
     }
 }
 
@@ -307,7 +351,7 @@ pub(crate) fn rebuild_walls(
 pub fn refresh_fluid_state(world: &mut World) {
     let mut results = vec![
         world.run_system_cached(apply_params),
-        world.run_system_cached(reject_invalid_particles),
+        world.run_system_cached(guard_particles),
         world.run_system_cached(rebuild_walls),
         world.run_system_cached(build_neighbor_grid),
     ];
@@ -840,6 +884,9 @@ pub(crate) fn update_stats(
             0.0
         },
         non_finite_resets: solver.non_finite,
+        removed_non_finite: solver.removed_non_finite,
+        removed_escaped: solver.removed_escaped,
+        slow_motion: clock.dropped > stats.dropped_time,
         solver: solver.constants.solver,
         density_iterations: solver.iterations.density,
         divergence_iterations: solver.iterations.divergence,

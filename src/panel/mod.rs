@@ -309,10 +309,25 @@ fn stats_section(ui: &mut egui::Ui, data: &PanelData, stats: &SphStats, fluid: b
             row("sim time", format!("{:.2} s", stats.time));
             row("fps", format!("{:.0}", rates.fps));
             stat_grid(ui, "stats", rows);
+            if stats.slow_motion {
+                ui.colored_label(
+                    egui::Color32::from_rgb(255, 190, 90),
+                    "slow motion: the flow needs more sub-steps per tick than max sub-steps",
+                );
+            }
             if stats.non_finite_resets > 0 {
                 ui.colored_label(
                     egui::Color32::LIGHT_RED,
                     format!("{} non-finite updates held back", stats.non_finite_resets),
+                );
+            }
+            if stats.removed_non_finite + stats.removed_escaped > 0 {
+                ui.colored_label(
+                    egui::Color32::LIGHT_RED,
+                    format!(
+                        "removed: {} not finite, {} outside the tank",
+                        stats.removed_non_finite, stats.removed_escaped
+                    ),
                 );
             }
         });
