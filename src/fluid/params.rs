@@ -334,8 +334,7 @@ impl SphParams {
         positive("rest_density", self.rest_density, 1.0e5, "kg/m³")?;
         positive("speed_of_sound", self.speed_of_sound, 1.0e4, "m/s")?;
         range("eos_exponent", self.eos_exponent, 1.0, 10.0, "")?;
-        let stiffness =
-            self.rest_density * self.speed_of_sound * self.speed_of_sound / self.eos_exponent;
+        let stiffness = self.tait_stiffness();
         range(
             "background_pressure",
             self.background_pressure,
@@ -460,12 +459,17 @@ impl SphParams {
         Ok(())
     }
 
+    /// The Tait stiffness `B = ρ₀ c₀² / γ`, Pa: the equation of state's pressure scale (the one
+    /// place it is computed).
+    pub fn tait_stiffness(&self) -> f32 {
+        self.rest_density * self.speed_of_sound * self.speed_of_sound / self.eos_exponent
+    }
+
     /// The derived constants the solver runs on, if the parameters are valid.
     pub fn constants(&self) -> Result<SphConstants, SphParamsError> {
         self.validate()?;
         let support = self.support_radius();
-        let stiffness =
-            self.rest_density * self.speed_of_sound * self.speed_of_sound / self.eos_exponent;
+        let stiffness = self.tait_stiffness();
         Ok(SphConstants {
             kernel: self.kernel,
             spacing: self.particle_spacing,

@@ -126,8 +126,7 @@ impl FluidBlock {
             return positions;
         }
         let (columns, rows) = self.lattice_size(spacing);
-        let stiffness = params.rest_density * params.speed_of_sound * params.speed_of_sound
-            / params.eos_exponent;
+        let stiffness = params.tait_stiffness();
         let row_spacing = |row: u32| {
             let depth = (rows - row) as f32 * spacing - 0.5 * spacing;
             let pressure = params.rest_density * -g.y * depth;

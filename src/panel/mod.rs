@@ -428,7 +428,7 @@ fn fluid_section(ui: &mut egui::Ui, data: &mut PanelData, fluid: bool) {
                 "",
                 false,
             );
-            let stiffness = p.rest_density * p.speed_of_sound * p.speed_of_sound / p.eos_exponent;
+            let stiffness = p.tait_stiffness();
             param_slider(
                 ui,
                 &mut p.background_pressure,
@@ -465,16 +465,8 @@ fn fluid_section(ui: &mut egui::Ui, data: &mut PanelData, fluid: bool) {
                 ui,
                 "kernel",
                 &mut p.kernel,
-                &[
-                    KernelKind::WendlandC2,
-                    KernelKind::CubicSpline,
-                    KernelKind::Muller,
-                ],
-                |k| match k {
-                    KernelKind::WendlandC2 => "Wendland C2",
-                    KernelKind::CubicSpline => "Cubic spline",
-                    KernelKind::Muller => "Müller (poly6/spiky)",
-                },
+                &KernelKind::ALL,
+                KernelKind::label,
             );
             param_slider(
                 ui,
