@@ -377,7 +377,7 @@ fn spawn_bodies(
 }
 
 /// What the pointer pushes: gravity bodies' position, velocity and acceleration.
-type FreeBody = (
+type PushedBody = (
     &'static Position,
     &'static Velocity,
     &'static mut GravityAcceleration,
@@ -386,7 +386,7 @@ type FreeBody = (
 /// The pointer's force on gravity bodies (fluid particles get it in the fluid's sub-steps).
 fn push_bodies(
     pointer: Res<Pointer>,
-    mut bodies: Query<FreeBody, (With<Mass>, Without<FluidParticle>)>,
+    mut bodies: Query<PushedBody, (With<Mass>, Without<FluidParticle>)>,
 ) {
     let force = pointer.force;
     if force.action == PointerAction::None {
