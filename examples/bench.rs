@@ -355,14 +355,6 @@ fn gravity_bench(cli: &Cli) {
     if let Err(error) = params.validate() {
         refuse(error);
     }
-    // The tree build and the field run on rayon from inside Bevy's systems, which run on Bevy's
-    // threads, so they use rayon's global pool: give it the same thread count.
-    if let Err(error) = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build_global()
-    {
-        eprintln!("rayon's global pool was already set up: {error}");
-    }
     {
         if bodies <= DIRECT_LIMIT {
             let direct_steps = steps.min(3);

@@ -38,6 +38,7 @@
 
 #![warn(missing_docs)]
 
+pub mod compute;
 pub mod control;
 #[cfg(feature = "egui")]
 pub mod demo;

@@ -21,7 +21,6 @@ use bevy::ecs::batching::BatchingStrategy;
 use bevy::ecs::query::QueryItem;
 use bevy::platform::time::Instant;
 use bevy::prelude::*;
-use bevy::tasks::ComputeTaskPool;
 use core::sync::atomic::{AtomicU32, Ordering};
 
 /// Smallest amount of per-particle work worth a task of its own: below it, waking a thread
@@ -469,7 +468,7 @@ pub(crate) fn build_neighbor_grid(
 /// [`SphSubstepSystems::Density`](super::SphSubstepSystems::Density) for WCSPH: summed density
 /// and the equation of state by sorted slot, stored in the snapshot for the force pass (with
 /// each particle's fluid neighbours, which the force pass reuses), then the wall particles'
-/// pressure extrapolated from the fluid; one parallel region (see [`solver_region`]).
+/// pressure extrapolated from the fluid; one parallel region (see [`slot_region`]).
 pub(crate) fn compute_density(mut solver: ResMut<SphSolver>) {
     let solver = &mut *solver;
     let c = solver.constants;
@@ -643,25 +642,7 @@ pub(crate) fn prepare_dfsph(mut solver: ResMut<SphSolver>) {
     });
 }
 
-/// Runs a DFSPH step (the neighbour pass, or a solve) as one parallel region: on a rayon pool of
-/// as many threads as Bevy's compute pool, called from one of its workers, so that the workers
-/// stay awake from one of the solve's 20-40 passes to the next. Measured with the `bench`
-/// example on the demo's dam break, two threads: with a task per pass on Bevy's pool, whose
-/// threads sleep between passes, 10,000 particles ran at 0.11x real time (1.1-1.4 times one
-/// thread) and 2,500 no faster than on one thread; in regions, 0.17x (1.7 times one thread) and
-/// 1.37x (from 0.93-1.0x).
-fn solver_region<R: Send>(work: impl FnOnce() -> R + Send) -> R {
-    static POOL: std::sync::OnceLock<rayon::ThreadPool> = std::sync::OnceLock::new();
-    POOL.get_or_init(|| {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(ComputeTaskPool::get().thread_num().max(1))
-            .build()
-            .expect("a rayon pool")
-    })
-    .install(work)
-}
-
-/// Where a step's slot passes run (a [`Parallel`]): in a [`solver_region`], or on the calling
+/// Where a step's slot passes run (a [`Parallel`]): in a [`compute::region`](crate::compute::region), or on the calling
 /// thread.
 #[derive(Debug, Clone, Copy)]
 enum Passes {
@@ -685,14 +666,15 @@ impl Parallel for Passes {
     }
 }
 
-/// Runs `work`, a step of slot passes over `n` particles, in a [`solver_region`] from
+/// Runs `work`, a step of slot passes over `n` particles, in a
+/// [`compute::region`](crate::compute::region) from
 /// [`PARALLEL_SLOTS`] particles on with more than one compute thread, on the calling thread
 /// otherwise (where handing the step to another thread costs and gains nothing).
 fn slot_region<R: Send>(n: usize, work: impl FnOnce(Passes) -> R + Send) -> R {
-    if n < PARALLEL_SLOTS || ComputeTaskPool::get().thread_num() <= 1 {
+    if n < PARALLEL_SLOTS || crate::compute::threads() <= 1 {
         work(Passes::Here)
     } else {
-        solver_region(|| work(Passes::Region))
+        crate::compute::region(|| work(Passes::Region))
     }
 }
 

@@ -64,7 +64,8 @@ pub struct GravityPotential(pub f32);
 ///    evaluate the field once so their first kick has an acceleration.
 /// 2. [`GravitySystems::Drift`]: leapfrog half kick and drift of bodies that are not fluid
 ///    particles (`par_iter_mut`).
-/// 3. [`GravitySystems::Field`]: build the quadtree (parallel sort and top levels on rayon),
+/// 3. [`GravitySystems::Field`]: build the quadtree (parallel sort and top levels on the crate's
+///    compute pool, [`compute::region`](crate::compute::region)),
 ///    evaluate the field at every body with a group walk ([`QuadTree::fields`], in parallel on
 ///    rayon, in the tree's cache-friendly order) and store each body's acceleration and
 ///    potential (`par_iter_mut`).

@@ -122,12 +122,14 @@ pub(crate) fn compute_gravity_field(
         softening: params.softening,
     };
     if !params.direct_sum {
-        solver.tree.build(
-            &solver.positions,
-            &solver.masses,
-            params.leaf_capacity as usize,
-        );
-        solver.tree.fields(&gravity, &mut solver.fields);
+        // The tree build and the field on the crate's compute pool (as the fluid's passes).
+        let (tree, fields) = (&mut solver.tree, &mut solver.fields);
+        let (positions, masses) = (&solver.positions, &solver.masses);
+        let leaf_capacity = params.leaf_capacity as usize;
+        crate::compute::region(|| {
+            tree.build(positions, masses, leaf_capacity);
+            tree.fields(&gravity, fields);
+        });
         solver.rank.clear();
         solver.rank.resize(solver.positions.len(), u32::MAX);
         for (k, &original) in solver.tree.order().iter().enumerate() {
