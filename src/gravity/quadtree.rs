@@ -81,8 +81,8 @@ impl QuadTree {
     /// Rebuilds the tree over `positions` (m) and `masses` (kg), leaves holding at most
     /// `leaf_capacity` bodies (more only where bodies share a position). Bodies with a
     /// non-finite position or a non-finite or non-positive mass are left out. Sorting and the
-    /// top of the tree run in parallel on the current rayon pool for large inputs (the plugin calls it in a
-    /// [`compute::region`](crate::compute::region)).
+    /// top of the tree run in parallel on the current rayon pool for large inputs (the plugin
+    /// calls it in a [`compute::region`](crate::compute::region)).
     pub fn build(&mut self, positions: &[Vec2], masses: &[f32], leaf_capacity: usize) {
         let leaf_capacity = leaf_capacity.max(1);
         let valid = |i: usize| {
