@@ -367,19 +367,7 @@ fn record_galaxy(config: &GalaxyConfig) -> std::io::Result<()> {
         config.dt,
     )))
     .insert_resource(TimeUpdateStrategy::FixedTimesteps(1));
-    let bodies = config.disc.generate();
-    let ids: Vec<Entity> = app
-        .world_mut()
-        .spawn_batch(
-            bodies
-                .positions
-                .iter()
-                .zip(&bodies.velocities)
-                .zip(&bodies.masses)
-                .map(|((p, v), m)| (Mass(*m), Position(*p), Velocity(*v)))
-                .collect::<Vec<_>>(),
-        )
-        .collect();
+    let ids = config.disc.spawn(app.world_mut());
     // The first update starts the clocks; the second runs the first step, whose start
     // evaluates the new bodies' field.
     app.update();

@@ -104,20 +104,29 @@ impl GalaxyDisc {
     }
 }
 
+impl GalaxyDisc {
+    /// Spawns the disc's bodies into `world` and returns them, the central body first.
+    pub fn spawn(&self, world: &mut World) -> Vec<Entity> {
+        let bodies = self.generate();
+        world
+            .spawn_batch(
+                bodies
+                    .positions
+                    .into_iter()
+                    .zip(bodies.velocities)
+                    .zip(bodies.masses)
+                    .map(|((p, v), m)| (Mass(m), Position(p), Velocity(v)))
+                    .collect::<Vec<_>>(),
+            )
+            .collect()
+    }
+}
+
 impl Command for GalaxyDisc {
     type Out = ();
 
     fn apply(self, world: &mut World) {
-        let bodies = self.generate();
-        world.spawn_batch(
-            bodies
-                .positions
-                .into_iter()
-                .zip(bodies.velocities)
-                .zip(bodies.masses)
-                .map(|((p, v), m)| (Mass(m), Position(p), Velocity(v)))
-                .collect::<Vec<_>>(),
-        );
+        self.spawn(world);
     }
 }
 
