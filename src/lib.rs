@@ -38,6 +38,7 @@
 
 #![warn(missing_docs)]
 
+pub mod body;
 pub mod compute;
 pub mod control;
 #[cfg(feature = "egui")]
@@ -127,11 +128,13 @@ pub mod prelude {
     pub use crate::ParticlePlugins;
     #[cfg(feature = "render")]
     pub use crate::ParticleUiPlugins;
+    pub use crate::body::{Position, Velocity};
     pub use crate::control::{ResetSimulation, SimulationControl};
     pub use crate::fluid::{
-        Acceleration, Density, FluidBlock, FluidParticle, KernelKind, Obstacle, Position, Pressure,
+        Acceleration, Density, EmitterRate, FluidBlock, FluidDrain, FluidEmitter, FluidEntered,
+        FluidLeft, FluidParticle, FluidRegion, FluidSensor, KernelKind, Obstacle, Pressure,
         ScenarioKind, SphParams, SphParamsStatus, SphPlugin, SphScenario, SphStats, SphSubstep,
-        SphSubstepSystems, SphSystems, Tank, Velocity,
+        SphSubstepSystems, SphSystems, Tank,
     };
     pub use crate::gravity::{
         GalaxyDisc, GravityParams, GravityPlugin, GravityStats, GravitySystems, Mass,

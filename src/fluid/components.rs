@@ -29,15 +29,7 @@ use bevy::prelude::*;
 )]
 pub struct FluidParticle;
 
-/// Position of a particle's centre in world space, m (y up).
-#[derive(Component, Reflect, Debug, Clone, Copy, Default, Deref, DerefMut, PartialEq)]
-#[reflect(Component, Default, Debug, PartialEq)]
-pub struct Position(pub Vec2);
-
-/// Velocity, m/s.
-#[derive(Component, Reflect, Debug, Clone, Copy, Default, Deref, DerefMut, PartialEq)]
-#[reflect(Component, Default, Debug, PartialEq)]
-pub struct Velocity(pub Vec2);
+pub use crate::body::{Position, Velocity};
 
 /// Acceleration of the last sub-step, m/s²: pressure, viscosity and gravity as computed in
 /// [`SphSubstepSystems::Forces`](crate::fluid::SphSubstepSystems::Forces), plus whatever a game's

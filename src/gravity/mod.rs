@@ -5,8 +5,9 @@ pub mod quadtree;
 pub mod scenario;
 pub mod systems;
 
+use crate::body::{Position, Velocity};
 use crate::control::{SimulationControlPlugin, SimulationControlSystems, simulation_running};
-use crate::fluid::{Position, SphSubstep, SphSubstepSystems, SphSystems, Velocity};
+use crate::fluid::{SphSubstep, SphSubstepSystems, SphSystems};
 use bevy::ecs::intern::Interned;
 use bevy::ecs::schedule::ScheduleLabel;
 use bevy::prelude::*;

@@ -2,8 +2,9 @@
 //! seed. See [`GravityPlugin`](crate::gravity::GravityPlugin).
 
 use super::Mass;
+use crate::body::{Position, Velocity};
 use crate::control::ResetSimulation;
-use crate::fluid::{FluidParticle, Position, Velocity};
+use crate::fluid::FluidParticle;
 use bevy::prelude::*;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;

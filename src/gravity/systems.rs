@@ -7,7 +7,8 @@ use super::params::{GravityParams, GravityParamsError};
 use super::quadtree::Field;
 use super::quadtree::{Gravity, QuadTree, direct_field_at};
 use super::{GravityAcceleration, GravityPotential, GravitySlot, Mass};
-use crate::fluid::{Acceleration, FluidParticle, Position, Velocity};
+use crate::body::{Position, Velocity};
+use crate::fluid::{Acceleration, FluidParticle};
 use bevy::platform::time::Instant;
 use bevy::prelude::*;
 

@@ -4,10 +4,11 @@
 
 pub mod tools;
 
+use crate::body::{Position, Velocity};
 use crate::control::{ResetSimulation, SimulationControl, simulation_running};
 use crate::fluid::{
-    Acceleration, FluidParticle, LoadSlot, Position, SaveSlot, SphParams, SphSubstep,
-    SphSubstepSystems, SphSystems, Velocity,
+    Acceleration, FluidParticle, LoadSlot, SaveSlot, SphParams, SphSubstep, SphSubstepSystems,
+    SphSystems,
 };
 use crate::gravity::{GravityAcceleration, GravitySystems, Mass};
 use crate::render::{ParticleDraw, ParticleView, SphCamera, cursor_to_world};

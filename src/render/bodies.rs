@@ -2,7 +2,8 @@
 //! [`SphRenderPlugin`](crate::render::SphRenderPlugin).
 
 use super::{ColorMap, ColorRange, ColorTable, ParticleTexture, PreviousPosition};
-use crate::fluid::{FluidParticle, Position, Velocity};
+use crate::body::{Position, Velocity};
+use crate::fluid::FluidParticle;
 use crate::gravity::Mass;
 use bevy::prelude::*;
 

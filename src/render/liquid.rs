@@ -12,7 +12,8 @@
 //! shows as long as its peak `Δx² / (π R² / 4)` is above the threshold.
 
 use super::{ParticleDraw, ParticleView, PreviousPosition, RenderMode, SphCamera, shown_value};
-use crate::fluid::{Density, FluidParticle, Position, Pressure, SphParams, Velocity};
+use crate::body::{Position, Velocity};
+use crate::fluid::{Density, FluidParticle, Pressure, SphParams};
 use bevy::asset::{AssetPath, RenderAssetUsages, embedded_asset, embedded_path};
 use bevy::camera::visibility::{NoFrustumCulling, RenderLayers};
 use bevy::camera::{CameraProjection, CompositingSpace, Hdr, RenderTarget, ScalingMode};

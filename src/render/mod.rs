@@ -7,9 +7,8 @@ pub mod colormap;
 pub mod liquid;
 pub mod view;
 
-use crate::fluid::{
-    Density, FluidParticle, Obstacle, Position, Pressure, SphParams, SphSystems, Velocity,
-};
+use crate::body::{Position, Velocity};
+use crate::fluid::{Density, FluidParticle, Obstacle, Pressure, SphParams, SphSystems};
 use bevy::asset::RenderAssetUsages;
 use bevy::prelude::*;
 use bevy::render::render_resource::{Extent3d, TextureDimension, TextureFormat};
