@@ -49,6 +49,7 @@ pub mod gravity;
 pub mod interact;
 #[cfg(feature = "egui")]
 pub mod panel;
+pub mod params;
 #[cfg(feature = "render")]
 pub mod render;
 

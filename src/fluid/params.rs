@@ -5,7 +5,6 @@ use super::boundary::Tank;
 use super::kernels::{self, KernelKind};
 use super::solver::SphConstants;
 use bevy::prelude::*;
-use core::fmt;
 
 /// Standard gravity, m/s².
 pub const STANDARD_GRAVITY: f32 = 9.81;
@@ -147,22 +146,8 @@ impl Default for SphParams {
     }
 }
 
-/// Why a [`SphParams`] value was refused.
-#[derive(Debug, Clone, PartialEq)]
-pub struct SphParamsError {
-    /// The offending field.
-    pub field: &'static str,
-    /// What is wrong, with the value and the accepted range.
-    pub message: String,
-}
-
-impl fmt::Display for SphParamsError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "invalid SphParams.{}: {}", self.field, self.message)
-    }
-}
-
-impl std::error::Error for SphParamsError {}
+/// Why a [`SphParams`] value was refused (the crate's one [`ParamsError`](crate::params::ParamsError)).
+pub type SphParamsError = crate::params::ParamsError;
 
 /// Most wall particles a tank may need before validation refuses it (memory guard).
 pub const MAX_WALL_PARTICLES: u64 = 4_000_000;
@@ -311,6 +296,7 @@ impl SphParams {
                 Ok(())
             } else {
                 Err(SphParamsError {
+                    owner: "SphParams",
                     field,
                     message: format!("{value} {unit} is outside {min}..={max} {unit}"),
                 })
@@ -326,6 +312,7 @@ impl SphParams {
                 Ok(())
             } else {
                 Err(SphParamsError {
+                    owner: "SphParams",
                     field,
                     message: format!("{value} {unit} must be positive and at most {max} {unit}"),
                 })
@@ -365,6 +352,7 @@ impl SphParams {
         )?;
         range("support_ratio", self.support_ratio, 1.5, 5.0, "spacings").map_err(|e| {
             SphParamsError {
+                owner: "SphParams",
                 message: format!(
                     "{}: the kernel support {} m must span 1.5 to 5 particle spacings ({} m), \
                      or particles see too few (or far too many) neighbours",
@@ -377,6 +365,7 @@ impl SphParams {
         })?;
         if !self.gravity.is_finite() || self.gravity.length() > 1.0e4 {
             return Err(SphParamsError {
+                owner: "SphParams",
                 field: "gravity",
                 message: format!(
                     "{} m/s² must be finite and at most 1e4 m/s² long",
@@ -387,6 +376,7 @@ impl SphParams {
         range("cfl_number", self.cfl_number, 0.01, 1.0, "")?;
         if self.max_substeps == 0 || self.max_substeps > 100_000 {
             return Err(SphParamsError {
+                owner: "SphParams",
                 field: "max_substeps",
                 message: format!("{} is outside 1..=100000", self.max_substeps),
             });
@@ -419,6 +409,7 @@ impl SphParams {
         ] {
             if !(min..=10_000).contains(&value) {
                 return Err(SphParamsError {
+                    owner: "SphParams",
                     field,
                     message: format!("{value} is outside {min}..=10000"),
                 });
@@ -428,6 +419,7 @@ impl SphParams {
             for (field, value) in [("tank.width", tank.width), ("tank.height", tank.height)] {
                 if !(value.is_finite() && value >= self.particle_spacing && value <= 1.0e4) {
                     return Err(SphParamsError {
+                        owner: "SphParams",
                         field,
                         message: format!(
                             "{value} m must be finite, at least one particle spacing ({} m) \
@@ -440,6 +432,7 @@ impl SphParams {
             let walls = tank.sample_count(self.particle_spacing, self.wall_layers());
             if walls > MAX_WALL_PARTICLES {
                 return Err(SphParamsError {
+                    owner: "SphParams",
                     field: "tank",
                     message: format!(
                         "a {} m × {} m tank at {} m spacing needs {walls} wall particles \
@@ -452,6 +445,7 @@ impl SphParams {
         let mass = self.particle_mass();
         if !(mass.is_finite() && mass > 0.0) {
             return Err(SphParamsError {
+                owner: "SphParams",
                 field: "particle_spacing",
                 message: format!("gives a particle mass of {mass} kg/m"),
             });

@@ -2,7 +2,6 @@
 //! [`GravityPlugin`](crate::gravity::GravityPlugin).
 
 use bevy::prelude::*;
-use core::fmt;
 
 /// Barnes-Hut gravity parameters. Edit them at any time; every change is validated and a bad one
 /// is refused (the plugin keeps the last valid values and says why in [`GravityStats`]).
@@ -36,22 +35,9 @@ impl Default for GravityParams {
     }
 }
 
-/// Why a [`GravityParams`] value was refused: the field and what is wrong with it.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct GravityParamsError {
-    /// The field's name.
-    pub field: &'static str,
-    /// What is wrong, with the value and the accepted range.
-    pub message: String,
-}
-
-impl fmt::Display for GravityParamsError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "GravityParams::{}: {}", self.field, self.message)
-    }
-}
-
-impl std::error::Error for GravityParamsError {}
+/// Why a [`GravityParams`] value was refused (the crate's one
+/// [`ParamsError`](crate::params::ParamsError)).
+pub type GravityParamsError = crate::params::ParamsError;
 
 impl GravityParams {
     /// Checks every field; the first problem is returned with the field, value and range.
@@ -61,6 +47,7 @@ impl GravityParams {
                 Ok(())
             } else {
                 Err(GravityParamsError {
+                    owner: "GravityParams",
                     field,
                     message: format!("{value} {unit} is outside {min}..={max} {unit}"),
                 })
@@ -77,6 +64,7 @@ impl GravityParams {
         check("softening", self.softening, 0.0, 1.0e9, "m")?;
         if !(1..=64).contains(&self.leaf_capacity) {
             return Err(GravityParamsError {
+                owner: "GravityParams",
                 field: "leaf_capacity",
                 message: format!("{} is outside 1..=64", self.leaf_capacity),
             });
