@@ -24,8 +24,11 @@
 //!   [`Mass`](gravity::Mass), fluid particles included; [`GravityParams`](gravity::GravityParams)
 //!   tunes it.
 //! - [`ParticlePlugins`]: the simulation plugins, as a group (headless-safe).
-//! - `ParticleUiPlugins` (features `render`, `egui`, on by default): sprites tinted through a
-//!   colour map (`render::SphRenderPlugin`), mouse and keyboard tools
+//! - Emitters, drains, sensors and the point probe ([`fluid::FluidEmitter`],
+//!   [`fluid::FluidDrain`], [`fluid::FluidSensor`], [`fluid::probe`]), save and restore
+//!   ([`fluid::save_fluid`], [`fluid::load_fluid`]).
+//! - `ParticleUiPlugins` (features `render`, `egui`, on by default): a liquid view or sprites
+//!   tinted through a colour map (`render::SphRenderPlugin`), mouse and keyboard tools
 //!   (`interact::SphInteractPlugin`) and the egui tweak panel (`panel::SphPanelPlugin`);
 //!   `demo::SphDemoPlugin` is the `dam_break` example's whole app.
 //! - [`control`]: pause, single-step and reset for every simulation plugin.
