@@ -43,7 +43,23 @@ fn resting_layer() -> App {
 
 #[test]
 fn emitter_pours_at_its_volume_rate() {
-    let mut app = create_app(params());
+    emitter_rate(params());
+}
+
+#[test]
+fn emitter_pours_at_its_volume_rate_wcsph() {
+    emitter_rate(SphParams {
+        support_ratio: 2.5,
+        speed_of_sound: 20.0,
+        ..SphParams {
+            solver: bevy_sph2d::fluid::PressureSolver::Wcsph,
+            ..params()
+        }
+    });
+}
+
+fn emitter_rate(params: SphParams) {
+    let mut app = create_app(params);
     app.update();
     let rate = 0.01; // m²/s: a fifth of the nozzle's full 0.05 m × 1 m/s
     let emitter = app
