@@ -237,6 +237,19 @@ impl Default for SnapshotSlot {
     }
 }
 
+/// Runs `action` on the [`SnapshotSlot`]'s file and records how it went (warning on failure).
+fn with_slot(
+    world: &mut World,
+    action: impl FnOnce(&mut World, &std::path::Path) -> Result<String, SnapshotError>,
+) {
+    let path = world.get_resource_or_init::<SnapshotSlot>().path.clone();
+    let status = action(world, &path).map_err(|error| {
+        warn!("{error}");
+        error.to_string()
+    });
+    world.resource_mut::<SnapshotSlot>().status = Some(status);
+}
+
 /// A command that saves the fluid into the [`SnapshotSlot`]'s file.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct SaveSlot;
@@ -245,15 +258,9 @@ impl Command for SaveSlot {
     type Out = ();
 
     fn apply(self, world: &mut World) {
-        let path = world.get_resource_or_init::<SnapshotSlot>().path.clone();
-        let status = match save_fluid_to(world, &path) {
-            Ok(()) => Ok(format!("saved to {}", path.display())),
-            Err(error) => {
-                warn!("{error}");
-                Err(error.to_string())
-            }
-        };
-        world.resource_mut::<SnapshotSlot>().status = Some(status);
+        with_slot(world, |world, path| {
+            save_fluid_to(world, path).map(|()| format!("saved to {}", path.display()))
+        });
     }
 }
 
@@ -266,14 +273,9 @@ impl Command for LoadSlot {
     type Out = ();
 
     fn apply(self, world: &mut World) {
-        let path = world.get_resource_or_init::<SnapshotSlot>().path.clone();
-        let status = match load_fluid_from(world, &path) {
-            Ok(n) => Ok(format!("loaded {n} particles from {}", path.display())),
-            Err(error) => {
-                warn!("{error}");
-                Err(error.to_string())
-            }
-        };
-        world.resource_mut::<SnapshotSlot>().status = Some(status);
+        with_slot(world, |world, path| {
+            load_fluid_from(world, path)
+                .map(|n| format!("loaded {n} particles from {}", path.display()))
+        });
     }
 }
