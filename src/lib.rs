@@ -2,7 +2,8 @@
 //!
 //! Bevy plugins for real-time 2D particle physics: an incompressible SPH fluid in SI units
 //! (divergence-free SPH by default, weakly compressible SPH on request), stepped in
-//! `FixedUpdate` with `par_iter_mut` and an O(n) cell-list neighbour search.
+//! `FixedUpdate` over a cell-sorted snapshot with an O(n) cell-list neighbour search, its passes
+//! over neighbours in parallel on one pool ([`compute`]).
 //!
 //! ```no_run
 //! use bevy::prelude::*;

@@ -72,14 +72,16 @@ pub use systems::{SphParamsStatus, SphSolver, SphStats, refresh_fluid_state};
 ///       [`Acceleration`] with `+=`, e.g.
 ///       `app.add_systems(SphSubstep, wind.in_set(SphSubstepSystems::ExternalForces))`.
 ///    5. [`SphSubstepSystems::Integrate`]: choose the step; DFSPH solves for the pressure that
-///       keeps the density at rest under all the accelerations above; advance
-///       (`par_iter_mut`), keep particles in the tank and out of obstacles.
+///       keeps the density at rest under all the accelerations above; advance, keep particles
+///       in the tank and out of obstacles.
 /// 3. [`SphSystems::Finish`]: [`FluidEmitter`]s pour, [`FluidDrain`]s remove, [`FluidSensor`]s
 ///    measure (and send [`FluidEntered`] and [`FluidLeft`]), then fill [`SphStats`].
 ///
-/// The passes over neighbours run by sorted slot in parallel regions on a rayon pool of as many
-/// threads as Bevy's `ComputeTaskPool` (whose threads would sleep between passes); the grid and
-/// the passes over components use the `ComputeTaskPool` itself. On machines with few cores
+/// The grid rebuild and the passes over neighbours run by sorted slot in parallel regions on the
+/// crate's pool ([`compute::region`](crate::compute::region): as many threads as Bevy's
+/// `ComputeTaskPool`, whose own threads would sleep between passes); the light passes over
+/// components (`par_iter_mut` from 8,192 particles) use the `ComputeTaskPool`. On machines with
+/// few cores
 /// Bevy's default pool sizes leave one compute thread; set `TaskPoolPlugin`'s options to use
 /// them all.
 pub struct SphPlugin {

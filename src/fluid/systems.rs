@@ -1,6 +1,7 @@
 //! The fluid's ECS systems: thin glue that gathers particles into the solver's cell-sorted
-//! snapshot and calls the maths in [`solver`](super::solver) from `par_iter_mut`. See
-//! [`SphPlugin`](crate::fluid::SphPlugin) for the schedule they run in.
+//! snapshot, runs the solvers' passes over it by sorted slot in parallel regions
+//! ([`compute::region`](crate::compute::region)), and copies the results into the components.
+//! See [`SphPlugin`](crate::fluid::SphPlugin) for the schedule they run in.
 
 use super::SphSubstep;
 use super::boundary::Obstacle;
