@@ -96,7 +96,7 @@ pub fn task_pool_plugin(compute_threads: usize) -> TaskPoolPlugin {
 /// The simulation plugins of the crate: they run headless (with `MinimalPlugins`) as well as in
 /// a game. Configure one with `.set(SphPlugin::default().with_fixed_hz(120.0))` or leave one out
 /// with `.disable::<SphPlugin>()`. For sprites, mouse tools and the panel add
-/// [`ParticleUiPlugins`] too.
+/// `ParticleUiPlugins` too.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct ParticlePlugins;
 
