@@ -98,3 +98,36 @@ fn particles_spawned_outside_the_tank_are_brought_inside() {
         assert!(s.position.y >= 0.0 && s.position.y <= 0.4, "{}", s.position);
     }
 }
+
+#[test]
+fn gravity_refuses_bad_parameters_through_the_same_pattern() {
+    use bevy::time::TimeUpdateStrategy;
+    use bevy_sph2d::params::ParamsStatus;
+    let mut app = App::new();
+    app.add_plugins((MinimalPlugins, GravityPlugin::default()))
+        .insert_resource(TimeUpdateStrategy::FixedTimesteps(1));
+    app.update();
+    app.world_mut().resource_mut::<GravityParams>().theta = -1.0;
+    app.update();
+    app.update();
+    let error = app
+        .world()
+        .resource::<ParamsStatus<GravityParams>>()
+        .error
+        .clone()
+        .expect("refused");
+    assert_eq!((error.owner, error.field), ("GravityParams", "theta"));
+    assert!(
+        error
+            .to_string()
+            .starts_with("invalid GravityParams.theta:"),
+        "{error}"
+    );
+    app.world_mut().resource_mut::<GravityParams>().theta = 0.7;
+    app.update();
+    app.update();
+    assert_eq!(
+        app.world().resource::<ParamsStatus<GravityParams>>().error,
+        None
+    );
+}

@@ -253,7 +253,7 @@ impl Plugin for SphPlugin {
             (
                 (
                     scenario::reset_scenario,
-                    systems::apply_params,
+                    crate::params::apply_params::<SphParams>,
                     systems::guard_particles,
                     systems::rebuild_walls,
                 )

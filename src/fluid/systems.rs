@@ -187,13 +187,8 @@ pub struct SolverIterations {
     pub total: u64,
 }
 
-/// Whether the last change to [`SphParams`] was accepted.
-#[derive(Resource, Debug, Clone, Default, PartialEq)]
-pub struct SphParamsStatus {
-    /// Why the current [`SphParams`] were refused (the solver runs on the last valid ones), or
-    /// `None` if they are in use.
-    pub error: Option<SphParamsError>,
-}
+/// Whether the last change to [`SphParams`] was accepted (`error`: why not).
+pub type SphParamsStatus = crate::params::ParamsStatus<SphParams>;
 
 /// Statistics of the last fixed tick, for panels and logs.
 #[derive(Resource, Reflect, Debug, Clone, Default, PartialEq)]
@@ -245,34 +240,23 @@ pub struct SphStats {
     pub solver_density_error: f32,
 }
 
-/// Validates a changed [`SphParams`] and adopts it, or keeps the last valid one and reports why.
-pub(crate) fn apply_params(
-    params: Res<SphParams>,
-    mut solver: ResMut<SphSolver>,
-    mut status: ResMut<SphParamsStatus>,
-) {
-    if !params.is_changed() {
-        return;
-    }
-    match params.constants() {
-        Ok(constants) => {
-            let old = solver.constants;
-            let geometry_changed = old.tank != constants.tank
-                || old.spacing != constants.spacing
-                || old.support != constants.support
-                || old.wall_layers != constants.wall_layers;
-            solver.constants = constants;
-            if geometry_changed {
-                solver.walls_dirty = true;
-            }
-            status.set_if_neq(SphParamsStatus { error: None });
+impl crate::params::Params for SphParams {
+    type Solver = SphSolver;
+    const WHAT: &'static str = "the fluid";
+
+    /// Derives the constants and re-samples the walls if the geometry changed.
+    fn adopt(&self, solver: &mut SphSolver) -> Result<(), SphParamsError> {
+        let constants = self.constants()?;
+        let old = solver.constants;
+        let geometry_changed = old.tank != constants.tank
+            || old.spacing != constants.spacing
+            || old.support != constants.support
+            || old.wall_layers != constants.wall_layers;
+        solver.constants = constants;
+        if geometry_changed {
+            solver.walls_dirty = true;
         }
-        Err(error) => {
-            if status.error.as_ref() != Some(&error) {
-                error!("{error}; the fluid keeps running on the last valid parameters");
-                status.error = Some(error);
-            }
-        }
+        Ok(())
     }
 }
 
@@ -350,7 +334,7 @@ pub(crate) fn rebuild_walls(
 /// right after spawning (the solver otherwise computes them during the next sub-step).
 pub fn refresh_fluid_state(world: &mut World) {
     let mut results = vec![
-        world.run_system_cached(apply_params),
+        world.run_system_cached(crate::params::apply_params::<SphParams>),
         world.run_system_cached(guard_particles),
         world.run_system_cached(rebuild_walls),
         world.run_system_cached(build_neighbor_grid),

@@ -23,7 +23,7 @@ pub use systems::{GravitySolver, GravityStats};
 /// `world.run_system_cached(refresh_gravity_field)`.
 pub fn refresh_gravity_field(world: &mut World) {
     let results = [
-        world.run_system_cached(systems::apply_gravity_params),
+        world.run_system_cached(crate::params::apply_params::<GravityParams>),
         world.run_system_cached(systems::compute_gravity_field),
         world.run_system_cached(systems::update_gravity_stats),
     ];
@@ -133,6 +133,7 @@ impl Plugin for GravityPlugin {
             .insert_resource(self.params.clone())
             .init_resource::<systems::GravitySolver>()
             .init_resource::<GravityStats>()
+            .init_resource::<crate::params::ParamsStatus<GravityParams>>()
             .configure_sets(
                 self.schedule,
                 (
@@ -150,7 +151,7 @@ impl Plugin for GravityPlugin {
                 (
                     (
                         scenario::reset_bodies,
-                        systems::apply_gravity_params,
+                        crate::params::apply_params::<GravityParams>,
                         systems::compute_gravity_field.run_if(systems::bodies_added),
                     )
                         .chain()

@@ -53,9 +53,6 @@ pub struct GravityStats {
     pub potential_energy: f64,
     /// Total momentum `Σ mv`, kg·m/s.
     pub momentum: Vec2,
-    /// Why the current [`GravityParams`] were refused, if they were.
-    #[reflect(ignore)]
-    pub error: Option<GravityParamsError>,
 }
 
 impl GravityStats {
@@ -65,26 +62,14 @@ impl GravityStats {
     }
 }
 
-/// Validates changed parameters and adopts them, or keeps the last valid ones.
-pub(crate) fn apply_gravity_params(
-    params: Res<GravityParams>,
-    mut solver: ResMut<GravitySolver>,
-    mut stats: ResMut<GravityStats>,
-) {
-    if !params.is_changed() {
-        return;
-    }
-    match params.validate() {
-        Ok(()) => {
-            solver.params = params.clone();
-            stats.error = None;
-        }
-        Err(error) => {
-            if stats.error.as_ref() != Some(&error) {
-                error!("{error}; gravity keeps running on the last valid parameters");
-                stats.error = Some(error);
-            }
-        }
+impl crate::params::Params for GravityParams {
+    type Solver = GravitySolver;
+    const WHAT: &'static str = "gravity";
+
+    fn adopt(&self, solver: &mut GravitySolver) -> Result<(), GravityParamsError> {
+        self.validate()?;
+        solver.params = self.clone();
+        Ok(())
     }
 }
 

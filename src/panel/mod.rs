@@ -137,6 +137,7 @@ struct PanelData<'w> {
     keys: Res<'w, ButtonInput<KeyCode>>,
     gravity: Option<ResMut<'w, GravityParams>>,
     gravity_stats: Option<Res<'w, GravityStats>>,
+    gravity_status: Option<Res<'w, crate::params::ParamsStatus<GravityParams>>>,
     bodies: Option<ResMut<'w, BodyView>>,
     liquid: ResMut<'w, LiquidStyle>,
     slot: Res<'w, SnapshotSlot>,
@@ -612,7 +613,7 @@ fn gravity_section(ui: &mut egui::Ui, data: &mut PanelData) {
                 ),
             );
             stat_grid(ui, "gravity_stats", rows);
-            if let Some(error) = &stats.error {
+            if let Some(error) = data.gravity_status.as_ref().and_then(|s| s.error.as_ref()) {
                 ui.colored_label(egui::Color32::LIGHT_RED, format!("refused: {error}"));
             }
         });
