@@ -149,10 +149,195 @@ impl Default for SphParams {
 /// Why a [`SphParams`] value was refused (the crate's one [`ParamsError`](crate::params::ParamsError)).
 pub type SphParamsError = crate::params::ParamsError;
 
+/// One numeric field of [`SphParams`] as validation and the panel see it: its name, label and
+/// unit, the values validation accepts, and the range and scale of the panel's slider. A new
+/// numeric field is one row of [`SphParams::FIELDS`].
+#[derive(Debug, Clone, Copy)]
+pub struct ParamField {
+    /// The field's path, as errors name it.
+    pub field: &'static str,
+    /// The panel's label.
+    pub label: &'static str,
+    /// The unit ("" for none).
+    pub unit: &'static str,
+    /// The accepted values, inclusive (`positive`: above zero up to the maximum).
+    pub valid: (f32, f32),
+    /// Zero excluded.
+    pub positive: bool,
+    /// The panel slider's range (within `valid`).
+    pub slider: (f32, f32),
+    /// A logarithmic slider.
+    pub logarithmic: bool,
+    /// Reads the field.
+    pub get: fn(&SphParams) -> f32,
+    /// Writes the field.
+    pub set: fn(&mut SphParams, f32),
+}
+
+impl ParamField {
+    /// Whether `params` has an accepted value here; the error names the value and the range.
+    pub fn check(&self, params: &SphParams) -> Result<(), SphParamsError> {
+        let value = (self.get)(params);
+        let (min, max) = self.valid;
+        let unit = self.unit;
+        let ok = value.is_finite()
+            && value <= max
+            && if self.positive {
+                value > 0.0
+            } else {
+                value >= min
+            };
+        if ok {
+            return Ok(());
+        }
+        Err(SphParamsError {
+            owner: "SphParams",
+            field: self.field,
+            message: if self.positive {
+                format!("{value} {unit} must be positive and at most {max} {unit}")
+            } else {
+                format!("{value} {unit} is outside {min}..={max} {unit}")
+            },
+        })
+    }
+
+    /// The row of `field` in [`SphParams::FIELDS`].
+    pub fn of(field: &str) -> Option<&'static ParamField> {
+        SphParams::FIELDS.iter().find(|f| f.field == field)
+    }
+}
+
 /// Most wall particles a tank may need before validation refuses it (memory guard).
 pub const MAX_WALL_PARTICLES: u64 = 4_000_000;
 
 impl SphParams {
+    /// The numeric fields with a plain range, in the panel's order (the fields whose range
+    /// depends on others, the vectors and the counts are checked in [`validate`](Self::validate)
+    /// itself).
+    pub const FIELDS: &'static [ParamField] = &[
+        ParamField {
+            field: "rest_density",
+            label: "rest density ρ₀",
+            unit: "kg/m³",
+            valid: (0.0, 1.0e5),
+            positive: true,
+            slider: (0.5, 5000.0),
+            logarithmic: true,
+            get: |p| p.rest_density,
+            set: |p, v| p.rest_density = v,
+        },
+        ParamField {
+            field: "speed_of_sound",
+            label: "speed of sound c₀",
+            unit: "m/s",
+            valid: (0.0, 1.0e4),
+            positive: true,
+            slider: (1.0, 300.0),
+            logarithmic: true,
+            get: |p| p.speed_of_sound,
+            set: |p, v| p.speed_of_sound = v,
+        },
+        ParamField {
+            field: "eos_exponent",
+            label: "EOS exponent γ",
+            unit: "",
+            valid: (1.0, 10.0),
+            positive: false,
+            slider: (1.0, 10.0),
+            logarithmic: false,
+            get: |p| p.eos_exponent,
+            set: |p, v| p.eos_exponent = v,
+        },
+        ParamField {
+            field: "kinematic_viscosity",
+            label: "kinematic viscosity ν",
+            unit: "m²/s",
+            valid: (0.0, 100.0),
+            positive: false,
+            slider: (0.0, 1.0e-2),
+            logarithmic: true,
+            get: |p| p.kinematic_viscosity,
+            set: |p, v| p.kinematic_viscosity = v,
+        },
+        ParamField {
+            field: "artificial_viscosity",
+            label: "artificial viscosity α",
+            unit: "",
+            valid: (0.0, 10.0),
+            positive: false,
+            slider: (0.0, 1.0),
+            logarithmic: false,
+            get: |p| p.artificial_viscosity,
+            set: |p, v| p.artificial_viscosity = v,
+        },
+        ParamField {
+            field: "cfl_number",
+            label: "CFL number",
+            unit: "",
+            valid: (0.01, 1.0),
+            positive: false,
+            slider: (0.01, 1.0),
+            logarithmic: false,
+            get: |p| p.cfl_number,
+            set: |p, v| p.cfl_number = v,
+        },
+        ParamField {
+            field: "wall_restitution",
+            label: "wall restitution",
+            unit: "",
+            valid: (0.0, 1.0),
+            positive: false,
+            slider: (0.0, 1.0),
+            logarithmic: false,
+            get: |p| p.wall_restitution,
+            set: |p, v| p.wall_restitution = v,
+        },
+        ParamField {
+            field: "dfsph.cfl_number",
+            label: "flow CFL C",
+            unit: "",
+            valid: (0.05, 1.0),
+            positive: false,
+            slider: (0.05, 1.0),
+            logarithmic: false,
+            get: |p| p.dfsph.cfl_number,
+            set: |p, v| p.dfsph.cfl_number = v,
+        },
+        ParamField {
+            field: "dfsph.max_time_step",
+            label: "longest sub-step",
+            unit: "s",
+            valid: (1.0e-5, 0.1),
+            positive: false,
+            slider: (1.0e-4, 0.02),
+            logarithmic: true,
+            get: |p| p.dfsph.max_time_step,
+            set: |p, v| p.dfsph.max_time_step = v,
+        },
+        ParamField {
+            field: "dfsph.density_tolerance",
+            label: "density tolerance",
+            unit: "",
+            valid: (1.0e-6, 0.1),
+            positive: false,
+            slider: (1.0e-6, 0.01),
+            logarithmic: true,
+            get: |p| p.dfsph.density_tolerance,
+            set: |p, v| p.dfsph.density_tolerance = v,
+        },
+        ParamField {
+            field: "dfsph.divergence_tolerance",
+            label: "divergence tolerance",
+            unit: "",
+            valid: (1.0e-6, 1.0),
+            positive: false,
+            slider: (1.0e-5, 0.1),
+            logarithmic: true,
+            get: |p| p.dfsph.divergence_tolerance,
+            set: |p, v| p.dfsph.divergence_tolerance = v,
+        },
+    ];
+
     /// Water in a 2 m × 1.2 m tank at 2 cm spacing, incompressible ([`PressureSolver::Dfsph`],
     /// support 2 spacings: about 12 neighbours, as SPlisHSPlasH's default; the lattice gradient
     /// correction keeps its hydrostatic pressure exact). The speed of sound only scales the artificial viscosity here, and is
@@ -302,25 +487,9 @@ impl SphParams {
                 })
             }
         }
-        fn positive(
-            field: &'static str,
-            value: f32,
-            max: f32,
-            unit: &str,
-        ) -> Result<(), SphParamsError> {
-            if value.is_finite() && value > 0.0 && value <= max {
-                Ok(())
-            } else {
-                Err(SphParamsError {
-                    owner: "SphParams",
-                    field,
-                    message: format!("{value} {unit} must be positive and at most {max} {unit}"),
-                })
-            }
+        for field in Self::FIELDS {
+            field.check(self)?;
         }
-        positive("rest_density", self.rest_density, 1.0e5, "kg/m³")?;
-        positive("speed_of_sound", self.speed_of_sound, 1.0e4, "m/s")?;
-        range("eos_exponent", self.eos_exponent, 1.0, 10.0, "")?;
         let stiffness = self.tait_stiffness();
         range(
             "background_pressure",
@@ -328,20 +497,6 @@ impl SphParams {
             0.0,
             10.0 * stiffness,
             "Pa",
-        )?;
-        range(
-            "kinematic_viscosity",
-            self.kinematic_viscosity,
-            0.0,
-            100.0,
-            "m²/s",
-        )?;
-        range(
-            "artificial_viscosity",
-            self.artificial_viscosity,
-            0.0,
-            10.0,
-            "",
         )?;
         range(
             "particle_spacing",
@@ -373,7 +528,6 @@ impl SphParams {
                 ),
             });
         }
-        range("cfl_number", self.cfl_number, 0.01, 1.0, "")?;
         if self.max_substeps == 0 || self.max_substeps > 100_000 {
             return Err(SphParamsError {
                 owner: "SphParams",
@@ -381,24 +535,7 @@ impl SphParams {
                 message: format!("{} is outside 1..=100000", self.max_substeps),
             });
         }
-        range("wall_restitution", self.wall_restitution, 0.0, 1.0, "")?;
         let d = &self.dfsph;
-        range("dfsph.cfl_number", d.cfl_number, 0.05, 1.0, "")?;
-        range("dfsph.max_time_step", d.max_time_step, 1.0e-5, 0.1, "s")?;
-        range(
-            "dfsph.density_tolerance",
-            d.density_tolerance,
-            1.0e-6,
-            0.1,
-            "",
-        )?;
-        range(
-            "dfsph.divergence_tolerance",
-            d.divergence_tolerance,
-            1.0e-6,
-            1.0,
-            "",
-        )?;
         for (field, value, min) in [
             ("dfsph.max_density_iterations", d.max_density_iterations, 1),
             (
@@ -496,6 +633,30 @@ impl SphParams {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn every_slider_lies_inside_what_validation_accepts() {
+        let water = SphParams::water();
+        for row in SphParams::FIELDS {
+            let (low, high) = row.slider;
+            for value in [low, high] {
+                let mut p = water.clone();
+                (row.set)(&mut p, value);
+                assert_eq!((row.get)(&p), value, "{}", row.field);
+                let ok = row.check(&p);
+                // A positive field's slider may start at zero only if zero is accepted.
+                assert!(
+                    ok.is_ok() || (row.positive && value == 0.0),
+                    "{}: {ok:?}",
+                    row.field
+                );
+            }
+            let mut bad = water.clone();
+            (row.set)(&mut bad, f32::NAN);
+            let error = bad.validate().unwrap_err();
+            assert_eq!(error.field, row.field);
+        }
+    }
 
     #[test]
     fn defaults_are_valid() {

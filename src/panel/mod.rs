@@ -4,6 +4,7 @@
 mod widgets;
 
 use crate::control::{ResetSimulation, SimulationControl};
+use crate::fluid::params::ParamField;
 use crate::fluid::{
     KernelKind, LoadSlot, PressureSolver, SaveSlot, ScenarioKind, SnapshotSlot, SphParams,
     SphParamsStatus, SphScenario, SphStats,
@@ -405,30 +406,9 @@ fn fluid_section(ui: &mut egui::Ui, data: &mut PanelData, fluid: bool) {
                     p = keep(SphParams::gas(), &p);
                 }
             });
-            param_slider(
-                ui,
-                &mut p.rest_density,
-                0.5..=5000.0,
-                "rest density ρ₀",
-                "kg/m³",
-                true,
-            );
-            param_slider(
-                ui,
-                &mut p.speed_of_sound,
-                1.0..=300.0,
-                "speed of sound c₀",
-                "m/s",
-                true,
-            );
-            param_slider(
-                ui,
-                &mut p.eos_exponent,
-                1.0..=10.0,
-                "EOS exponent γ",
-                "",
-                false,
-            );
+            for field in ["rest_density", "speed_of_sound", "eos_exponent"] {
+                field_slider(ui, &mut p, field);
+            }
             let stiffness = p.tait_stiffness();
             param_slider(
                 ui,
@@ -438,22 +418,9 @@ fn fluid_section(ui: &mut egui::Ui, data: &mut PanelData, fluid: bool) {
                 "Pa",
                 false,
             );
-            param_slider(
-                ui,
-                &mut p.kinematic_viscosity,
-                0.0..=1.0e-2,
-                "kinematic viscosity ν",
-                "m²/s",
-                true,
-            );
-            param_slider(
-                ui,
-                &mut p.artificial_viscosity,
-                0.0..=1.0,
-                "artificial viscosity α",
-                "",
-                false,
-            );
+            for field in ["kinematic_viscosity", "artificial_viscosity"] {
+                field_slider(ui, &mut p, field);
+            }
             param_slider(
                 ui,
                 &mut p.support_ratio,
@@ -501,7 +468,7 @@ fn fluid_section(ui: &mut egui::Ui, data: &mut PanelData, fluid: bool) {
             );
             match p.solver {
                 PressureSolver::Wcsph => {
-                    param_slider(ui, &mut p.cfl_number, 0.05..=1.0, "CFL number", "", false);
+                    field_slider(ui, &mut p, "cfl_number");
                 }
                 PressureSolver::Dfsph => dfsph_settings(ui, &mut p),
             }
@@ -510,14 +477,7 @@ fn fluid_section(ui: &mut egui::Ui, data: &mut PanelData, fluid: bool) {
                     .logarithmic(true)
                     .text("max sub-steps / tick"),
             );
-            param_slider(
-                ui,
-                &mut p.wall_restitution,
-                0.0..=1.0,
-                "wall restitution",
-                "",
-                false,
-            );
+            field_slider(ui, &mut p, "wall_restitution");
             ui.small(format!(
                 "particle spacing Δx = {:.1} mm (set by the scenario's particle count)",
                 1000.0 * p.particle_spacing
@@ -535,33 +495,35 @@ fn fluid_section(ui: &mut egui::Ui, data: &mut PanelData, fluid: bool) {
 }
 
 /// The divergence-free solver's settings.
+/// The slider of one of [`SphParams::FIELDS`]: the label, unit, range and scale its row gives.
+fn field_slider(ui: &mut egui::Ui, p: &mut SphParams, field: &str) {
+    let Some(row) = ParamField::of(field) else {
+        return;
+    };
+    let mut value = (row.get)(p);
+    param_slider(
+        ui,
+        &mut value,
+        row.slider.0..=row.slider.1,
+        row.label,
+        row.unit,
+        row.logarithmic,
+    );
+    if value != (row.get)(p) {
+        (row.set)(p, value);
+    }
+}
+
 fn dfsph_settings(ui: &mut egui::Ui, p: &mut SphParams) {
+    for field in [
+        "dfsph.cfl_number",
+        "dfsph.max_time_step",
+        "dfsph.density_tolerance",
+        "dfsph.divergence_tolerance",
+    ] {
+        field_slider(ui, p, field);
+    }
     let d = &mut p.dfsph;
-    param_slider(ui, &mut d.cfl_number, 0.05..=1.0, "flow CFL C", "", false);
-    param_slider(
-        ui,
-        &mut d.max_time_step,
-        1.0e-4..=0.02,
-        "longest sub-step",
-        "s",
-        true,
-    );
-    param_slider(
-        ui,
-        &mut d.density_tolerance,
-        1.0e-6..=0.01,
-        "density tolerance",
-        "",
-        true,
-    );
-    param_slider(
-        ui,
-        &mut d.divergence_tolerance,
-        1.0e-5..=0.1,
-        "divergence tolerance",
-        "",
-        true,
-    );
     ui.add(
         egui::Slider::new(&mut d.max_density_iterations, 1..=500)
             .logarithmic(true)
