@@ -174,6 +174,25 @@ pub struct ParamField {
     pub set: fn(&mut SphParams, f32),
 }
 
+/// A [`ParamField`] row for the field at `$path` (`rest_density`, `dfsph.cfl_number`): its
+/// name, getter and setter come from the path.
+macro_rules! param_field {
+    ($($path:ident).+, $label:expr, $unit:expr, $valid:expr, $positive:expr, $slider:expr,
+     $log:expr) => {
+        ParamField {
+            field: stringify!($($path).+),
+            label: $label,
+            unit: $unit,
+            valid: $valid,
+            positive: $positive,
+            slider: $slider,
+            logarithmic: $log,
+            get: |p| p.$($path).+,
+            set: |p, v| p.$($path).+ = v,
+        }
+    };
+}
+
 impl ParamField {
     /// Whether `params` has an accepted value here; the error names the value and the range.
     pub fn check(&self, params: &SphParams) -> Result<(), SphParamsError> {
@@ -214,128 +233,20 @@ impl SphParams {
     /// The numeric fields with a plain range, in the panel's order (the fields whose range
     /// depends on others, the vectors and the counts are checked in [`validate`](Self::validate)
     /// itself).
+    #[rustfmt::skip]
     pub const FIELDS: &'static [ParamField] = &[
-        ParamField {
-            field: "rest_density",
-            label: "rest density ρ₀",
-            unit: "kg/m³",
-            valid: (0.0, 1.0e5),
-            positive: true,
-            slider: (0.5, 5000.0),
-            logarithmic: true,
-            get: |p| p.rest_density,
-            set: |p, v| p.rest_density = v,
-        },
-        ParamField {
-            field: "speed_of_sound",
-            label: "speed of sound c₀",
-            unit: "m/s",
-            valid: (0.0, 1.0e4),
-            positive: true,
-            slider: (1.0, 300.0),
-            logarithmic: true,
-            get: |p| p.speed_of_sound,
-            set: |p, v| p.speed_of_sound = v,
-        },
-        ParamField {
-            field: "eos_exponent",
-            label: "EOS exponent γ",
-            unit: "",
-            valid: (1.0, 10.0),
-            positive: false,
-            slider: (1.0, 10.0),
-            logarithmic: false,
-            get: |p| p.eos_exponent,
-            set: |p, v| p.eos_exponent = v,
-        },
-        ParamField {
-            field: "kinematic_viscosity",
-            label: "kinematic viscosity ν",
-            unit: "m²/s",
-            valid: (0.0, 100.0),
-            positive: false,
-            slider: (0.0, 1.0e-2),
-            logarithmic: true,
-            get: |p| p.kinematic_viscosity,
-            set: |p, v| p.kinematic_viscosity = v,
-        },
-        ParamField {
-            field: "artificial_viscosity",
-            label: "artificial viscosity α",
-            unit: "",
-            valid: (0.0, 10.0),
-            positive: false,
-            slider: (0.0, 1.0),
-            logarithmic: false,
-            get: |p| p.artificial_viscosity,
-            set: |p, v| p.artificial_viscosity = v,
-        },
-        ParamField {
-            field: "cfl_number",
-            label: "CFL number",
-            unit: "",
-            valid: (0.01, 1.0),
-            positive: false,
-            slider: (0.01, 1.0),
-            logarithmic: false,
-            get: |p| p.cfl_number,
-            set: |p, v| p.cfl_number = v,
-        },
-        ParamField {
-            field: "wall_restitution",
-            label: "wall restitution",
-            unit: "",
-            valid: (0.0, 1.0),
-            positive: false,
-            slider: (0.0, 1.0),
-            logarithmic: false,
-            get: |p| p.wall_restitution,
-            set: |p, v| p.wall_restitution = v,
-        },
-        ParamField {
-            field: "dfsph.cfl_number",
-            label: "flow CFL C",
-            unit: "",
-            valid: (0.05, 1.0),
-            positive: false,
-            slider: (0.05, 1.0),
-            logarithmic: false,
-            get: |p| p.dfsph.cfl_number,
-            set: |p, v| p.dfsph.cfl_number = v,
-        },
-        ParamField {
-            field: "dfsph.max_time_step",
-            label: "longest sub-step",
-            unit: "s",
-            valid: (1.0e-5, 0.1),
-            positive: false,
-            slider: (1.0e-4, 0.02),
-            logarithmic: true,
-            get: |p| p.dfsph.max_time_step,
-            set: |p, v| p.dfsph.max_time_step = v,
-        },
-        ParamField {
-            field: "dfsph.density_tolerance",
-            label: "density tolerance",
-            unit: "",
-            valid: (1.0e-6, 0.1),
-            positive: false,
-            slider: (1.0e-6, 0.01),
-            logarithmic: true,
-            get: |p| p.dfsph.density_tolerance,
-            set: |p, v| p.dfsph.density_tolerance = v,
-        },
-        ParamField {
-            field: "dfsph.divergence_tolerance",
-            label: "divergence tolerance",
-            unit: "",
-            valid: (1.0e-6, 1.0),
-            positive: false,
-            slider: (1.0e-5, 0.1),
-            logarithmic: true,
-            get: |p| p.dfsph.divergence_tolerance,
-            set: |p, v| p.dfsph.divergence_tolerance = v,
-        },
+        // path, label, unit, accepted range, zero excluded, slider range, logarithmic
+        param_field!(rest_density, "rest density ρ₀", "kg/m³", (0.0, 1.0e5), true, (0.5, 5000.0), true),
+        param_field!(speed_of_sound, "speed of sound c₀", "m/s", (0.0, 1.0e4), true, (1.0, 300.0), true),
+        param_field!(eos_exponent, "EOS exponent γ", "", (1.0, 10.0), false, (1.0, 10.0), false),
+        param_field!(kinematic_viscosity, "kinematic viscosity ν", "m²/s", (0.0, 100.0), false, (0.0, 1.0e-2), true),
+        param_field!(artificial_viscosity, "artificial viscosity α", "", (0.0, 10.0), false, (0.0, 1.0), false),
+        param_field!(cfl_number, "CFL number", "", (0.01, 1.0), false, (0.01, 1.0), false),
+        param_field!(wall_restitution, "wall restitution", "", (0.0, 1.0), false, (0.0, 1.0), false),
+        param_field!(dfsph.cfl_number, "flow CFL C", "", (0.05, 1.0), false, (0.05, 1.0), false),
+        param_field!(dfsph.max_time_step, "longest sub-step", "s", (1.0e-5, 0.1), false, (1.0e-4, 0.02), true),
+        param_field!(dfsph.density_tolerance, "density tolerance", "", (1.0e-6, 0.1), false, (1.0e-6, 0.01), true),
+        param_field!(dfsph.divergence_tolerance, "divergence tolerance", "", (1.0e-6, 1.0), false, (1.0e-5, 0.1), true),
     ];
 
     /// Water in a 2 m × 1.2 m tank at 2 cm spacing, incompressible ([`PressureSolver::Dfsph`],

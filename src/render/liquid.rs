@@ -478,18 +478,14 @@ pub(crate) fn update_liquid(
         *image = color_map_image(particle_view.color_map);
         view.map_in_texture = particle_view.color_map;
     }
-    // World metres per screen pixel, for the rim's width in pixels.
-    let metres_per_pixel = match cameras.get(view.camera) {
-        Ok(Projection::Orthographic(ortho)) => windows
-            .single()
-            .map(|w| ortho.area.height() / w.height().max(1.0))
-            .unwrap_or(spacing),
-        _ => spacing,
-    };
+    // The view's height (m) and metres per screen pixel (for the rim's width in pixels).
     let view_height = match cameras.get(view.camera) {
         Ok(Projection::Orthographic(ortho)) => ortho.area.height().max(1e-6),
         _ => 1.0,
     };
+    let metres_per_pixel = windows
+        .single()
+        .map_or(spacing, |w| view_height / w.height().max(1.0));
     let settings = LiquidUniform {
         shallow: style.shallow_color.to_linear().to_vec4(),
         deep: style.deep_color.to_linear().to_vec4(),
