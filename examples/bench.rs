@@ -332,11 +332,12 @@ fn time_gravity(bodies: usize, steps: usize, threads: usize, params: GravityPara
     let stats = app.world().resource::<GravityStats>();
     assert_eq!(stats.bodies, bodies, "the ECS lost bodies");
     eprintln!(
-        "{} bodies, {} nodes, field {:.1} ms of {:.1} ms per tick",
+        "{} bodies, {} nodes, field {:.1} ms of {:.1} ms per tick, {} sums",
         stats.bodies,
         stats.nodes,
         stats.field_ms,
-        1000.0 * seconds
+        1000.0 * seconds,
+        bevy_sph2d::gravity::simd_path()
     );
     seconds
 }

@@ -1,5 +1,6 @@
 //! The Barnes-Hut gravity plugin. See [`GravityPlugin`].
 
+pub mod kernel;
 pub mod params;
 pub mod quadtree;
 pub mod scenario;
@@ -12,6 +13,7 @@ use bevy::ecs::intern::Interned;
 use bevy::ecs::schedule::ScheduleLabel;
 use bevy::prelude::*;
 
+pub use kernel::simd_path;
 pub use params::{GravityParams, GravityParamsError};
 pub use quadtree::{Field, Gravity, QuadTree, direct_field_at};
 pub use scenario::{GalaxyDisc, GravityScenario};

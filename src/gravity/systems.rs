@@ -19,10 +19,8 @@ pub struct GravitySolver {
     tree: QuadTree,
     positions: Vec<Vec2>,
     masses: Vec<f32>,
-    /// Field of each tree body, in tree order.
+    /// Field of each gathered body, in gather order (zero for bodies left out of the tree).
     fields: Vec<Field>,
-    /// Tree position of each gathered body (`u32::MAX`: left out of the tree).
-    rank: Vec<u32>,
 }
 
 impl GravitySolver {
@@ -116,11 +114,6 @@ pub(crate) fn compute_gravity_field(
             tree.build(positions, masses, leaf_capacity);
             tree.fields(&gravity, fields);
         });
-        solver.rank.clear();
-        solver.rank.resize(solver.positions.len(), u32::MAX);
-        for (k, &original) in solver.tree.order().iter().enumerate() {
-            solver.rank[original as usize] = k as u32;
-        }
     }
     let solver = &*solver;
     bodies
@@ -134,9 +127,8 @@ pub(crate) fn compute_gravity_field(
                 }
             } else {
                 solver
-                    .rank
+                    .fields
                     .get(slot.0 as usize)
-                    .and_then(|&k| solver.fields.get(k as usize))
                     .copied()
                     .unwrap_or_default()
             };
