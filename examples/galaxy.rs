@@ -20,7 +20,7 @@ fn main() {
     App::new()
         .add_plugins((
             DefaultPlugins.set(bevy_sph2d::task_pool_plugin(threads)),
-            ParticlePlugins
+            ParticlePlugins::default()
                 .set(SphPlugin::default().with_params(SphParams {
                     tank: None,
                     ..default()
@@ -47,7 +47,7 @@ fn main() {
 }
 
 fn setup(mut commands: Commands, mut resets: MessageWriter<ResetSimulation>) {
-    commands.spawn(SphCamera {
+    commands.spawn(ParticleCamera {
         region: Some(Rect::new(-1.05, -1.05, 1.05, 1.05)),
         ..default()
     });

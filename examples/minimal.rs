@@ -8,14 +8,18 @@ use bevy_sph2d::prelude::*;
 
 fn main() {
     App::new()
-        .add_plugins((DefaultPlugins, ParticlePlugins, ParticleUiPlugins))
+        .add_plugins((
+            DefaultPlugins,
+            ParticlePlugins::default(),
+            ParticleUiPlugins,
+        ))
         .add_systems(Startup, setup)
         .run();
 }
 
 fn setup(mut commands: Commands) {
     // A camera that keeps the tank (2 m × 1.2 m by default) in view.
-    commands.spawn(SphCamera::default());
+    commands.spawn(ParticleCamera::default());
     // A 0.6 m × 0.8 m column of water against the left wall.
     commands.queue(FluidBlock::dam_break(0.6, 0.8));
 }

@@ -18,7 +18,7 @@ fn main() {
     App::new()
         .add_plugins((
             DefaultPlugins.set(bevy_sph2d::task_pool_plugin(threads)),
-            ParticlePlugins
+            ParticlePlugins::default()
                 .set(SphPlugin::default().with_params(fluid()))
                 .set(GravityPlugin::default().with_params(GravityParams {
                     // Surface gravity G M / R² of about 5 m/s² for these blobs.
@@ -58,7 +58,7 @@ fn fluid() -> SphParams {
 }
 
 fn setup(mut commands: Commands, mut resets: MessageWriter<ResetSimulation>) {
-    commands.spawn(SphCamera {
+    commands.spawn(ParticleCamera {
         region: Some(Rect::new(-0.8, -0.45, 0.8, 0.45)),
         ..default()
     });

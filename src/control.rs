@@ -64,8 +64,9 @@ pub fn simulation_running(control: Option<Res<SimulationControl>>) -> bool {
     control.is_none_or(|control| control.is_running())
 }
 
-/// Adds [`SimulationControl`] and [`ResetSimulation`]; the fluid and gravity plugins add it
-/// themselves (once) in their schedule, so a game rarely needs to.
+/// Adds [`SimulationControl`] and [`ResetSimulation`];
+/// [`ParticleSchedulePlugin`](crate::schedule::ParticleSchedulePlugin) adds it (once) in the
+/// particle schedule, so a game rarely needs to.
 pub struct SimulationControlPlugin {
     /// The fixed schedule the simulations step in.
     pub schedule: Interned<dyn ScheduleLabel>,

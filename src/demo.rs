@@ -3,13 +3,13 @@
 
 use crate::control::ResetSimulation;
 use crate::fluid::{ScenarioKind, SphParams, SphPlugin, SphScenario};
-use crate::render::{ParticleDraw, ParticleView, RenderMode, SphCamera};
+use crate::render::{ParticleCamera, ParticleDraw, ParticleView, RenderMode};
 use crate::{ParticlePlugins, ParticleUiPlugins};
 use bevy::prelude::*;
 
 /// Everything the demo needs on top of `DefaultPlugins`: [`ParticlePlugins`] with
 /// [`demo_params`], [`ParticleUiPlugins`] drawing the liquid ([`ParticleDraw::Liquid`]; `L`
-/// switches to the particles), a [`SphCamera`], and the scenario spawned at start.
+/// switches to the particles), a [`ParticleCamera`], and the scenario spawned at start.
 #[derive(Debug, Clone)]
 pub struct SphDemoPlugin {
     /// The scenario spawned at start and on every reset.
@@ -53,7 +53,7 @@ pub const MAX_FRAME_TIME: f64 = 4.0 / 64.0;
 impl Plugin for SphDemoPlugin {
     fn build(&self, app: &mut App) {
         app.add_plugins((
-            ParticlePlugins.set(SphPlugin::default().with_params(self.params.clone())),
+            ParticlePlugins::default().set(SphPlugin::default().with_params(self.params.clone())),
             ParticleUiPlugins,
         ))
         .insert_resource(ClearColor(Color::srgb(0.04, 0.05, 0.07)))
@@ -68,7 +68,7 @@ impl Plugin for SphDemoPlugin {
 }
 
 fn start_demo(mut commands: Commands, mut resets: MessageWriter<ResetSimulation>) {
-    commands.spawn(SphCamera::default());
+    commands.spawn(ParticleCamera::default());
     resets.write(ResetSimulation);
 }
 

@@ -11,7 +11,7 @@
 //!
 //! fn main() {
 //!     App::new()
-//!         .add_plugins((MinimalPlugins, ParticlePlugins))
+//!         .add_plugins((MinimalPlugins, ParticlePlugins::default()))
 //!         .add_systems(Startup, |mut commands: Commands| {
 //!             // A 0.5 m × 1 m column of water against the left wall of the default tank.
 //!             commands.queue(FluidBlock::dam_break(0.5, 1.0));
@@ -24,13 +24,14 @@
 //! - [`GravityPlugin`](gravity::GravityPlugin): Barnes-Hut gravity between every entity with a
 //!   [`Mass`](gravity::Mass), fluid particles included; [`GravityParams`](gravity::GravityParams)
 //!   tunes it.
-//! - [`ParticlePlugins`]: the simulation plugins, as a group (headless-safe).
+//! - [`ParticlePlugins`]: the simulation plugins, as a group (headless-safe), in one schedule
+//!   under crate-wide sets ([`schedule`]).
 //! - Emitters, drains, sensors and the point probe ([`fluid::FluidEmitter`],
 //!   [`fluid::FluidDrain`], [`fluid::FluidSensor`], [`fluid::probe`]), save and restore
 //!   ([`fluid::save_fluid`], [`fluid::load_fluid`]).
 //! - `ParticleUiPlugins` (features `render`, `egui`, on by default): a liquid view or sprites
-//!   tinted through a colour map (`render::SphRenderPlugin`), mouse and keyboard tools
-//!   (`interact::SphInteractPlugin`) and the egui tweak panel (`panel::SphPanelPlugin`);
+//!   tinted through a colour map (`render::ParticleRenderPlugin`), mouse and keyboard tools
+//!   (`interact::ParticleInteractPlugin`) and the egui tweak panel (`panel::ParticlePanelPlugin`);
 //!   `demo::SphDemoPlugin` is the `dam_break` example's whole app.
 //! - [`control`]: pause, single-step and reset for every simulation plugin.
 //!
@@ -56,11 +57,15 @@ pub mod panel;
 pub mod params;
 #[cfg(feature = "render")]
 pub mod render;
+pub mod schedule;
 
 use bevy::app::{
-    PluginGroup, PluginGroupBuilder, TaskPoolOptions, TaskPoolPlugin,
+    FixedUpdate, PluginGroup, PluginGroupBuilder, TaskPoolOptions, TaskPoolPlugin,
     TaskPoolThreadAssignmentPolicy,
 };
+use bevy::ecs::intern::Interned;
+use bevy::ecs::schedule::ScheduleLabel;
+use bevy::prelude::default;
 
 /// A [`TaskPoolPlugin`] whose compute pool, which runs `par_iter_mut`, has exactly
 /// `compute_threads` threads (at least one), with one thread each for I/O and async compute.
@@ -93,25 +98,59 @@ pub fn task_pool_plugin(compute_threads: usize) -> TaskPoolPlugin {
     }
 }
 
-/// The simulation plugins of the crate: they run headless (with `MinimalPlugins`) as well as in
-/// a game. Configure one with `.set(SphPlugin::default().with_fixed_hz(120.0))` or leave one out
-/// with `.disable::<SphPlugin>()`. For sprites, mouse tools and the panel add
-/// `ParticleUiPlugins` too.
-#[derive(Debug, Clone, Copy, Default)]
-pub struct ParticlePlugins;
+/// The simulation plugins of the crate, all stepping in one schedule ([`FixedUpdate`] by
+/// default, or the one given to [`new`](Self::new)) under the crate-wide
+/// [`ParticleSystems`](schedule::ParticleSystems): they run headless (with `MinimalPlugins`) as
+/// well as in a game. Configure one with
+/// `.set(SphPlugin::new(schedule).with_fixed_hz(120.0))` (a plugin set this way takes the
+/// schedule given to it, so pass the same one) or leave one out with
+/// `.disable::<SphPlugin>()`. For sprites, mouse tools and the panel add `ParticleUiPlugins`
+/// after this group: they step in its schedule too.
+///
+/// [`FixedUpdate`]: bevy::prelude::FixedUpdate
+#[derive(Debug, Clone)]
+pub struct ParticlePlugins {
+    /// The schedule every plugin of the crate steps in.
+    pub schedule: Interned<dyn ScheduleLabel>,
+}
+
+impl Default for ParticlePlugins {
+    fn default() -> Self {
+        Self::new(FixedUpdate)
+    }
+}
+
+impl ParticlePlugins {
+    /// The crate's plugins, stepping in `schedule`.
+    pub fn new(schedule: impl ScheduleLabel) -> Self {
+        Self {
+            schedule: schedule.intern(),
+        }
+    }
+}
 
 impl PluginGroup for ParticlePlugins {
     fn build(self) -> PluginGroupBuilder {
         PluginGroupBuilder::start::<Self>()
-            .add(fluid::SphPlugin::default())
-            .add(gravity::GravityPlugin::default())
+            .add(schedule::ParticleSchedulePlugin {
+                schedule: self.schedule,
+                ..default()
+            })
+            .add(fluid::SphPlugin {
+                schedule: self.schedule,
+                ..default()
+            })
+            .add(gravity::GravityPlugin {
+                schedule: self.schedule,
+                ..default()
+            })
     }
 }
 
 /// The plugins that need a window (features `render` and `egui`): sprites
-/// ([`render::SphRenderPlugin`]), mouse and keyboard tools ([`interact::SphInteractPlugin`])
-/// and the tweak panel ([`panel::SphPanelPlugin`], feature `egui`). Add them after
-/// `DefaultPlugins` and [`ParticlePlugins`], and spawn a [`render::SphCamera`].
+/// ([`render::ParticleRenderPlugin`]), mouse and keyboard tools ([`interact::ParticleInteractPlugin`])
+/// and the tweak panel ([`panel::ParticlePanelPlugin`], feature `egui`). Add them after
+/// `DefaultPlugins` and [`ParticlePlugins`], and spawn a [`render::ParticleCamera`].
 #[cfg(feature = "render")]
 #[derive(Debug, Clone, Copy, Default)]
 pub struct ParticleUiPlugins;
@@ -120,10 +159,10 @@ pub struct ParticleUiPlugins;
 impl PluginGroup for ParticleUiPlugins {
     fn build(self) -> PluginGroupBuilder {
         let group = PluginGroupBuilder::start::<Self>()
-            .add(render::SphRenderPlugin)
-            .add(interact::SphInteractPlugin);
+            .add(render::ParticleRenderPlugin)
+            .add(interact::ParticleInteractPlugin);
         #[cfg(feature = "egui")]
-        let group = group.add(panel::SphPanelPlugin);
+        let group = group.add(panel::ParticlePanelPlugin);
         group
     }
 }
@@ -138,18 +177,23 @@ pub mod prelude {
     pub use crate::fluid::{
         Acceleration, Density, EmitterRate, FluidBlock, FluidDrain, FluidEmitter, FluidEntered,
         FluidLeft, FluidParticle, FluidRegion, FluidSensor, KernelKind, Obstacle, Pressure,
-        ScenarioKind, SphParams, SphParamsStatus, SphPlugin, SphScenario, SphStats, SphSubstep,
-        SphSubstepSystems, SphSystems, Tank,
+        ScenarioKind, SphParams, SphParamsStatus, SphPlugin, SphScenario, SphStats, SphSystems,
+        Tank,
     };
     pub use crate::gravity::{
-        GalaxyDisc, GravityParams, GravityPlugin, GravityStats, GravitySystems, Mass,
+        GalaxyDisc, GravityAcceleration, GravityParams, GravityPlugin, GravityStats,
+        GravitySystems, Mass,
     };
     #[cfg(feature = "render")]
-    pub use crate::interact::{PointerSettings, PointerTool, SphInteractPlugin};
+    pub use crate::interact::{ParticleInteractPlugin, PointerSettings, PointerTool};
     #[cfg(feature = "egui")]
-    pub use crate::panel::SphPanelPlugin;
+    pub use crate::panel::ParticlePanelPlugin;
     #[cfg(feature = "render")]
     pub use crate::render::{
-        ColorMap, LiquidStyle, ParticleDraw, ParticleView, RenderMode, SphCamera, SphRenderPlugin,
+        ColorMap, LiquidStyle, ParticleCamera, ParticleDraw, ParticleRenderPlugin, ParticleView,
+        RenderMode,
+    };
+    pub use crate::schedule::{
+        BodyForceSystems, ParticleSchedulePlugin, ParticleSystems, SphSubstep, SphSubstepSystems,
     };
 }

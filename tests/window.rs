@@ -18,7 +18,7 @@ use bevy_sph2d::demo::SphDemoPlugin;
 use bevy_sph2d::fluid::SphParams;
 use bevy_sph2d::fluid::{FluidParticle, Position, ScenarioKind, SphScenario, SphStats};
 use bevy_sph2d::interact::PointerSettings;
-use bevy_sph2d::render::{ParticleDraw, ParticleView, SphCamera};
+use bevy_sph2d::render::{ParticleCamera, ParticleDraw, ParticleView};
 use std::process::Command;
 use std::sync::Mutex;
 
@@ -161,7 +161,7 @@ fn script(
     time: Res<Time<Real>>,
     stats: Res<SphStats>,
     particles: Query<&Position, With<FluidParticle>>,
-    camera: Single<(&Camera, &GlobalTransform), With<SphCamera>>,
+    camera: Single<(&Camera, &GlobalTransform), With<ParticleCamera>>,
     mut window: Single<&mut Window, With<PrimaryWindow>>,
     view: Res<ParticleView>,
     params: Res<SphParams>,

@@ -25,8 +25,10 @@ use bevy::ecs::intern::Interned;
 use bevy::ecs::schedule::{ScheduleLabel, SingleThreadedExecutor};
 use bevy::prelude::*;
 
-use crate::control::{SimulationControlPlugin, SimulationControlSystems, simulation_running};
+use crate::control::simulation_running;
+use crate::schedule::{ParticleSchedulePlugin, ParticleSystems};
 
+pub use crate::schedule::{SphSubstep, SphSubstepSystems};
 pub use boundary::{Obstacle, Tank};
 pub use clock::SubstepClock;
 pub use components::{
@@ -136,25 +138,6 @@ pub enum SphSystems {
     Finish,
 }
 
-/// The stages of one sub-step in [`SphSubstep`], chained in this order.
-#[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum SphSubstepSystems {
-    /// Cell grid and sorted snapshot.
-    Neighbors,
-    /// Density, pressure, wall pressure.
-    Density,
-    /// Accelerations from pressure, viscosity and gravity.
-    Forces,
-    /// A game's own forces, added to [`Acceleration`] before integration.
-    ExternalForces,
-    /// Time step, integration, collisions.
-    Integrate,
-}
-
-/// The schedule of one fluid sub-step, run as many times per tick as stability needs.
-#[derive(ScheduleLabel, Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub struct SphSubstep;
-
 impl Plugin for SphPlugin {
     fn build(&self, app: &mut App) {
         if let Err(error) = self.params.validate() {
@@ -163,11 +146,7 @@ impl Plugin for SphPlugin {
         if let Some(hz) = self.fixed_hz {
             app.insert_resource(Time::<Fixed>::from_hz(hz));
         }
-        if !app.is_plugin_added::<SimulationControlPlugin>() {
-            app.add_plugins(SimulationControlPlugin {
-                schedule: self.schedule,
-            });
-        }
+        let schedule = ParticleSchedulePlugin::ensure(app, self.schedule);
         app.register_type::<SphParams>()
             .register_type::<SphScenario>()
             .register_type::<SphStats>()
@@ -200,6 +179,7 @@ impl Plugin for SphPlugin {
                     SphSubstepSystems::Neighbors,
                     SphSubstepSystems::Density,
                     SphSubstepSystems::Forces,
+                    SphSubstepSystems::FieldForces,
                     SphSubstepSystems::ExternalForces,
                     SphSubstepSystems::Integrate,
                 )
@@ -239,17 +219,15 @@ impl Plugin for SphPlugin {
         });
 
         app.configure_sets(
-            self.schedule,
+            schedule,
             (
-                SphSystems::Prepare,
-                SphSystems::Simulate,
-                SphSystems::Finish,
-            )
-                .chain()
-                .after(SimulationControlSystems),
+                SphSystems::Prepare.in_set(ParticleSystems::Prepare),
+                SphSystems::Simulate.in_set(ParticleSystems::Fluid),
+                SphSystems::Finish.in_set(ParticleSystems::Finish),
+            ),
         )
         .add_systems(
-            self.schedule,
+            schedule,
             (
                 (
                     scenario::reset_scenario,

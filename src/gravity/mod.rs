@@ -7,8 +7,10 @@ pub mod scenario;
 pub mod systems;
 
 use crate::body::{Position, Velocity};
-use crate::control::{SimulationControlPlugin, SimulationControlSystems, simulation_running};
-use crate::fluid::{SphSubstep, SphSubstepSystems, SphSystems};
+use crate::control::simulation_running;
+use crate::schedule::{
+    BodyForceSystems, ParticleSchedulePlugin, ParticleSystems, SphSubstep, SphSubstepSystems,
+};
 use bevy::ecs::intern::Interned;
 use bevy::ecs::schedule::ScheduleLabel;
 use bevy::prelude::*;
@@ -60,7 +62,8 @@ pub struct GravityPotential(pub f32);
 /// ([`FixedUpdate`] by default).
 ///
 /// # Schedule
-/// In order ([`GravitySystems`], all before [`SphSystems::Simulate`] when the fluid runs too):
+/// In order ([`GravitySystems`]; `Prepare` in [`ParticleSystems::Prepare`], the rest in
+/// [`ParticleSystems::Bodies`], before the fluid's sub-steps):
 /// 1. [`GravitySystems::Prepare`]: respawn the [`GravityScenario`] on
 ///    [`ResetSimulation`](crate::control::ResetSimulation); validate changed [`GravityParams`];
 ///    if bodies appeared,
@@ -72,12 +75,14 @@ pub struct GravityPotential(pub f32);
 ///    evaluate the field at every body with a group walk ([`QuadTree::fields`], in parallel on
 ///    rayon, in the tree's cache-friendly order) and store each body's acceleration and
 ///    potential (`par_iter_mut`).
-/// 4. [`GravitySystems::Kick`]: the second half kick; energy and momentum into
+/// 4. [`BodyForceSystems`]: other forces on bodies this tick (the mouse tools' push), added to
+///    [`GravityAcceleration`].
+/// 5. [`GravitySystems::Kick`]: the second half kick; energy and momentum into
 ///    [`GravityStats`].
 ///
 /// Fluid particles with a `Mass` keep the fluid's own stepping: their gravitational
 /// acceleration of the tick is added to the SPH forces in every sub-step
-/// ([`SphSubstepSystems::ExternalForces`]).
+/// ([`SphSubstepSystems::FieldForces`]).
 pub struct GravityPlugin {
     /// The schedule gravity steps in.
     pub schedule: Interned<dyn ScheduleLabel>,
@@ -95,6 +100,14 @@ impl Default for GravityPlugin {
 }
 
 impl GravityPlugin {
+    /// Steps gravity in `schedule` instead of [`FixedUpdate`].
+    pub fn new(schedule: impl ScheduleLabel) -> Self {
+        Self {
+            schedule: schedule.intern(),
+            ..default()
+        }
+    }
+
     /// Starts with these parameters.
     pub fn with_params(mut self, params: GravityParams) -> Self {
         self.params = params;
@@ -120,11 +133,7 @@ impl Plugin for GravityPlugin {
         if let Err(error) = self.params.validate() {
             error!("GravityPlugin: {error}; starting with GravityParams::default()");
         }
-        if !app.is_plugin_added::<SimulationControlPlugin>() {
-            app.add_plugins(SimulationControlPlugin {
-                schedule: self.schedule,
-            });
-        }
+        let schedule = ParticleSchedulePlugin::ensure(app, self.schedule);
         app.register_type::<GravityParams>()
             .register_type::<GravityStats>()
             .register_type::<Mass>()
@@ -137,19 +146,21 @@ impl Plugin for GravityPlugin {
             .init_resource::<GravityStats>()
             .init_resource::<crate::params::ParamsStatus<GravityParams>>()
             .configure_sets(
-                self.schedule,
+                schedule,
                 (
-                    GravitySystems::Prepare,
-                    GravitySystems::Drift,
-                    GravitySystems::Field,
-                    GravitySystems::Kick,
-                )
-                    .chain()
-                    .after(SimulationControlSystems)
-                    .before(SphSystems::Simulate),
+                    GravitySystems::Prepare.in_set(ParticleSystems::Prepare),
+                    (
+                        GravitySystems::Drift,
+                        GravitySystems::Field,
+                        BodyForceSystems,
+                        GravitySystems::Kick,
+                    )
+                        .chain()
+                        .in_set(ParticleSystems::Bodies),
+                ),
             )
             .add_systems(
-                self.schedule,
+                schedule,
                 (
                     (
                         scenario::reset_bodies,
@@ -173,7 +184,7 @@ impl Plugin for GravityPlugin {
         // Runs only if the fluid plugin runs its sub-steps.
         app.add_systems(
             SphSubstep,
-            systems::apply_gravity_to_fluid.in_set(SphSubstepSystems::ExternalForces),
+            systems::apply_gravity_to_fluid.in_set(SphSubstepSystems::FieldForces),
         );
     }
 }

@@ -1,6 +1,6 @@
 //! Feature `render`: the mouse and keyboard tools — pull, push, drag, pour and erase fluid
 //! under the cursor; pause, step, reset and tilt the tank from the keyboard. See
-//! [`SphInteractPlugin`].
+//! [`ParticleInteractPlugin`].
 
 pub mod tools;
 
@@ -8,10 +8,10 @@ use crate::body::{Position, Velocity};
 use crate::control::{ResetSimulation, SimulationControl, simulation_running};
 use crate::fluid::{
     Acceleration, FluidParticle, LoadSlot, SaveSlot, SphParams, SphSubstep, SphSubstepSystems,
-    SphSystems,
 };
-use crate::gravity::{GravityAcceleration, GravitySystems, Mass};
-use crate::render::{ParticleDraw, ParticleView, SphCamera, cursor_to_world};
+use crate::gravity::{GravityAcceleration, Mass};
+use crate::render::{ParticleCamera, ParticleDraw, ParticleView, cursor_to_world};
+use crate::schedule::{BodyForceSystems, ParticleSchedule, ParticleSystems};
 use bevy::input::mouse::AccumulatedMouseScroll;
 use bevy::prelude::*;
 use bevy::window::PrimaryWindow;
@@ -32,9 +32,9 @@ pub use tools::{PointerAction, PointerForce, falloff, nozzle_row, tilted_gravity
 /// The cursor is read each frame before the fixed steps
 /// ([`RunFixedMainLoopSystems::BeforeFixedMainLoop`]) into [`Pointer`]; the fixed step applies
 /// its force in [`SphSubstepSystems::ExternalForces`] and pours or erases in
-/// [`SphInteractSystems`], between [`SphSystems::Prepare`] and [`SphSystems::Simulate`].
+/// [`ParticleInteractSystems`], in [`ParticleSystems::Input`].
 #[derive(Debug, Clone, Copy, Default)]
-pub struct SphInteractPlugin;
+pub struct ParticleInteractPlugin;
 
 /// What the left mouse button does.
 #[derive(Reflect, Debug, Clone, Copy, Default, PartialEq, Eq, Hash)]
@@ -139,38 +139,35 @@ pub struct Pointer {
     poured: f32,
 }
 
-/// The pour and erase systems, in the fixed schedule between [`SphSystems::Prepare`] and
-/// [`SphSystems::Simulate`].
+/// The pour, erase and spawn systems, in [`ParticleSystems::Input`] of the particle schedule.
 #[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub struct SphInteractSystems;
+pub struct ParticleInteractSystems;
 
-impl Plugin for SphInteractPlugin {
+impl Plugin for ParticleInteractPlugin {
     fn build(&self, app: &mut App) {
+        let schedule = ParticleSchedule::of(app);
         app.register_type::<PointerSettings>()
             .register_type::<Pointer>()
             .init_resource::<PointerSettings>()
             .init_resource::<Pointer>()
             .configure_sets(
-                FixedUpdate,
-                SphInteractSystems
-                    .after(SphSystems::Prepare)
-                    .before(SphSystems::Simulate),
+                schedule,
+                ParticleInteractSystems.in_set(ParticleSystems::Input),
             )
             .add_systems(
                 RunFixedMainLoop,
                 track_pointer.in_set(RunFixedMainLoopSystems::BeforeFixedMainLoop),
             )
             .add_systems(
-                FixedUpdate,
+                schedule,
                 (
                     (pour_particles, erase_particles, spawn_bodies)
                         .chain()
                         .run_if(simulation_running)
-                        .in_set(SphInteractSystems),
+                        .in_set(ParticleInteractSystems),
                     push_bodies
                         .run_if(simulation_running)
-                        .after(GravitySystems::Field)
-                        .before(GravitySystems::Kick),
+                        .in_set(BodyForceSystems),
                 ),
             )
             .add_systems(
@@ -184,7 +181,7 @@ impl Plugin for SphInteractPlugin {
 /// Reads the cursor, buttons and wheel into [`Pointer`].
 fn track_pointer(
     window: Single<&Window, With<PrimaryWindow>>,
-    camera: Single<(&Camera, &GlobalTransform, &Projection), With<SphCamera>>,
+    camera: Single<(&Camera, &GlobalTransform, &Projection), With<ParticleCamera>>,
     buttons: Res<ButtonInput<MouseButton>>,
     scroll: Res<AccumulatedMouseScroll>,
     time: Res<Time<Real>>,

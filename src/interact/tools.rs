@@ -1,6 +1,6 @@
 //! Pure mouse-tool maths: the smooth force profile, the accelerations of the pull, push and drag
 //! tools, the pouring nozzle and gravity tilting. See
-//! [`SphInteractPlugin`](crate::interact::SphInteractPlugin).
+//! [`ParticleInteractPlugin`](crate::interact::ParticleInteractPlugin).
 
 use bevy::math::Vec2;
 use bevy::reflect::Reflect;

@@ -1,5 +1,5 @@
 //! Feature `egui`: the tweak panel — every fluid parameter live, presets, scenarios, render and
-//! tool settings, statistics, pause/step/reset. See [`SphPanelPlugin`].
+//! tool settings, statistics, pause/step/reset. See [`ParticlePanelPlugin`].
 
 mod widgets;
 
@@ -30,9 +30,9 @@ use widgets::{color_bar, enum_combo, param_slider, stat_grid};
 /// Adds [`EguiPlugin`] if the app has none, and a default [`SphScenario`] (the dam break) if the
 /// app has none, for its scenario menu and reset button.
 #[derive(Debug, Clone, Copy, Default)]
-pub struct SphPanelPlugin;
+pub struct ParticlePanelPlugin;
 
-impl Plugin for SphPanelPlugin {
+impl Plugin for ParticlePanelPlugin {
     fn build(&self, app: &mut App) {
         if !app.is_plugin_added::<EguiPlugin>() {
             app.add_plugins(EguiPlugin::default());

@@ -1,5 +1,5 @@
 //! Sprites for gravity bodies that are not fluid particles, tinted by speed or mass. See
-//! [`SphRenderPlugin`](crate::render::SphRenderPlugin).
+//! [`ParticleRenderPlugin`](crate::render::ParticleRenderPlugin).
 
 use super::{ColorMap, ColorRange, ColorTable, ParticleTexture, PreviousPosition};
 use crate::body::{Position, Velocity};

@@ -1,6 +1,6 @@
 //! Pure colour mapping: scalar fields to colours through perceptual colour maps (the `colorous`
 //! crate), and the percentile range that auto-scaling uses. See
-//! [`SphRenderPlugin`](crate::render::SphRenderPlugin).
+//! [`ParticleRenderPlugin`](crate::render::ParticleRenderPlugin).
 
 use bevy::color::{Color, LinearRgba, Srgba};
 use bevy::reflect::Reflect;

@@ -1,8 +1,8 @@
 //! The liquid view ([`ParticleDraw::Liquid`]): every fluid particle is splatted as a smooth bump
 //! into an off-screen field texture by a second camera (additive blending into a float target,
 //! at a resolution tied to the window's), and a full-screen quad in front of the main
-//! [`SphCamera`] turns the field into a liquid with its [`LiquidStyle`]. See
-//! [`SphRenderPlugin`](super::SphRenderPlugin).
+//! [`ParticleCamera`] turns the field into a liquid with its [`LiquidStyle`]. See
+//! [`ParticleRenderPlugin`](super::ParticleRenderPlugin).
 //!
 //! The field at a point is `Σⱼ wⱼ (1 − r²/R²)³` over the particles within the splat radius `R`,
 //! each weight `wⱼ = Δx² / (π R² / 4)` chosen so that the field is 1 inside a fluid at rest
@@ -11,7 +11,9 @@
 //! wide stays connected (its field peaks at about `1.16 Δx / R` along it), and a lone droplet
 //! shows as long as its peak `Δx² / (π R² / 4)` is above the threshold.
 
-use super::{ParticleDraw, ParticleView, PreviousPosition, RenderMode, SphCamera, shown_value};
+use super::{
+    ParticleCamera, ParticleDraw, ParticleView, PreviousPosition, RenderMode, shown_value,
+};
 use crate::body::{Position, Velocity};
 use crate::fluid::{Density, FluidParticle, Pressure, SphParams};
 use bevy::asset::{AssetPath, RenderAssetUsages, embedded_asset, embedded_path};
@@ -99,7 +101,7 @@ impl LiquidStyle {
     }
 }
 
-/// Adds the liquid view to [`SphRenderPlugin`](super::SphRenderPlugin).
+/// Adds the liquid view to [`ParticleRenderPlugin`](super::ParticleRenderPlugin).
 pub(crate) fn build(app: &mut App) {
     embedded_asset!(app, "shaders/splat.wgsl");
     embedded_asset!(app, "shaders/liquid.wgsl");
@@ -118,7 +120,7 @@ pub(crate) fn build(app: &mut App) {
     );
 }
 
-/// The entities and assets of the liquid view of the first [`SphCamera`].
+/// The entities and assets of the liquid view of the first [`ParticleCamera`].
 #[derive(Resource, Debug, Clone)]
 pub(crate) struct LiquidView {
     camera: Entity,
@@ -249,13 +251,13 @@ fn color_map_image(map: super::ColorMap) -> Image {
     image
 }
 
-/// Spawns the liquid view for the first [`SphCamera`]: the field camera, the splat mesh and
+/// Spawns the liquid view for the first [`ParticleCamera`]: the field camera, the splat mesh and
 /// the surface quad. Runs in `Update`, a frame after the camera appears, so that a UI plugin
 /// that attaches itself to the first camera (bevy_egui) finds the main one.
 #[allow(clippy::too_many_arguments)]
 fn spawn_liquid_view(
     view: Option<Res<LiquidView>>,
-    cameras: Query<Entity, With<SphCamera>>,
+    cameras: Query<Entity, With<ParticleCamera>>,
     mut images: ResMut<Assets<Image>>,
     mut meshes: ResMut<Assets<Mesh>>,
     mut splat_materials: ResMut<Assets<SplatMaterial>>,
@@ -440,7 +442,7 @@ pub(crate) fn update_liquid(
     mut materials: ResMut<Assets<LiquidMaterial>>,
     mut images: ResMut<Assets<Image>>,
     windows: Query<&Window, With<PrimaryWindow>>,
-    cameras: Query<&Projection, With<SphCamera>>,
+    cameras: Query<&Projection, With<ParticleCamera>>,
 ) {
     let Some(mut view) = view else {
         return;

@@ -1,6 +1,6 @@
 //! Feature `render`: a sprite per fluid particle, tinted through a colour map by density, speed
 //! or pressure, moved smoothly between fixed steps; a camera that keeps the tank in view. See
-//! [`SphRenderPlugin`].
+//! [`ParticleRenderPlugin`].
 
 pub mod bodies;
 pub mod colormap;
@@ -8,7 +8,8 @@ pub mod liquid;
 pub mod view;
 
 use crate::body::{Position, Velocity};
-use crate::fluid::{Density, FluidParticle, Obstacle, Pressure, SphParams, SphSystems};
+use crate::fluid::{Density, FluidParticle, Obstacle, Pressure, SphParams};
+use crate::schedule::{ParticleSchedule, ParticleSystems};
 use bevy::asset::RenderAssetUsages;
 use bevy::prelude::*;
 use bevy::render::render_resource::{Extent3d, TextureDimension, TextureFormat};
@@ -16,9 +17,9 @@ use bevy::render::render_resource::{Extent3d, TextureDimension, TextureFormat};
 pub use bodies::{BodyColor, BodyView};
 pub use colormap::{ColorMap, ColorRange, ColorTable};
 pub use liquid::LiquidStyle;
-pub use view::{SphCamera, ViewInsets, cursor_to_world, fit_tank};
+pub use view::{ParticleCamera, ViewInsets, cursor_to_world, fit_tank};
 
-/// Draws fluid particles as sprites and keeps a [`SphCamera`] framing the tank.
+/// Draws fluid particles as sprites and keeps a [`ParticleCamera`] framing the tank.
 ///
 /// Every [`FluidParticle`] gets a round [`Sprite`] when it appears (it goes with the entity when
 /// the particle is despawned). Each frame, after the fixed steps of that frame
@@ -28,13 +29,13 @@ pub use view::{SphCamera, ViewInsets, cursor_to_world, fit_tank};
 ///   lags the simulation by at most one tick);
 /// - the sprite colour shows the [`ParticleView`]'s quantity through its [`ColorMap`], over a
 ///   range that follows the data (quantiles, eased between frames) or is set by hand;
-/// - cameras with [`SphCamera`] are fitted to the tank in the window area that
+/// - cameras with [`ParticleCamera`] are fitted to the tank in the window area that
 ///   [`ViewInsets`] leaves free, so the tank fills the window at any size;
 /// - the tank walls and [`Obstacle`]s are outlined with gizmos;
 /// - gravity bodies that are not fluid particles get sprites too, tinted by speed or mass
 ///   ([`BodyView`]).
 #[derive(Debug, Clone, Copy, Default)]
-pub struct SphRenderPlugin;
+pub struct ParticleRenderPlugin;
 
 /// How fluid particles are drawn.
 #[derive(Reflect, Debug, Clone, Copy, Default, PartialEq, Eq, Hash)]
@@ -166,15 +167,16 @@ pub struct ParticleTexture(pub Handle<Image>);
 
 /// The sprite layer of the render systems, after the fixed steps of each frame.
 #[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum SphRenderSystems {
+pub enum ParticleRenderSystems {
     /// Camera fitting.
     Camera,
     /// Transforms and colours.
     Sprites,
 }
 
-impl Plugin for SphRenderPlugin {
+impl Plugin for ParticleRenderPlugin {
     fn build(&self, app: &mut App) {
+        let schedule = ParticleSchedule::of(app);
         app.register_type::<ParticleView>()
             .register_type::<BodyView>()
             .init_resource::<BodyView>()
@@ -185,19 +187,22 @@ impl Plugin for SphRenderPlugin {
             .add_systems(PreStartup, create_particle_texture)
             .add_observer(attach_sprite)
             .add_systems(
-                FixedUpdate,
-                remember_previous_positions.before(SphSystems::Simulate),
+                schedule,
+                remember_previous_positions.in_set(ParticleSystems::Prepare),
             )
             .configure_sets(
                 RunFixedMainLoop,
-                (SphRenderSystems::Camera, SphRenderSystems::Sprites)
+                (
+                    ParticleRenderSystems::Camera,
+                    ParticleRenderSystems::Sprites,
+                )
                     .chain()
                     .in_set(RunFixedMainLoopSystems::AfterFixedMainLoop),
             )
             .add_systems(
                 RunFixedMainLoop,
                 (
-                    view::fit_cameras.in_set(SphRenderSystems::Camera),
+                    view::fit_cameras.in_set(ParticleRenderSystems::Camera),
                     (
                         update_color_range,
                         update_sprites,
@@ -205,7 +210,7 @@ impl Plugin for SphRenderPlugin {
                         bodies::update_body_sprites,
                     )
                         .chain()
-                        .in_set(SphRenderSystems::Sprites),
+                        .in_set(ParticleRenderSystems::Sprites),
                 ),
             )
             .add_systems(Update, draw_outlines);

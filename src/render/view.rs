@@ -1,5 +1,5 @@
 //! Pure view maths (fitting a region into a window, cursor to world) and the camera-fitting
-//! system. See [`SphRenderPlugin`](crate::render::SphRenderPlugin).
+//! system. See [`ParticleRenderPlugin`](crate::render::ParticleRenderPlugin).
 
 use crate::fluid::SphParams;
 use bevy::camera::ScalingMode;
@@ -16,7 +16,7 @@ use bevy::window::PrimaryWindow;
 #[derive(Component, Reflect, Debug, Clone, Copy, PartialEq)]
 #[reflect(Component, Debug)]
 #[require(Camera2d, Msaa = Msaa::Off, DebandDither = DebandDither::Disabled)]
-pub struct SphCamera {
+pub struct ParticleCamera {
     /// Space kept around the tank, as a fraction of its larger side.
     pub margin: f32,
     /// Fit the camera every frame (turn off to pan and zoom it yourself).
@@ -25,7 +25,7 @@ pub struct SphCamera {
     pub region: Option<Rect>,
 }
 
-impl Default for SphCamera {
+impl Default for ParticleCamera {
     fn default() -> Self {
         Self {
             margin: 0.04,
@@ -84,12 +84,12 @@ pub fn cursor_to_world(cursor: Vec2, viewport: Vec2, area: Rect, camera: &Global
     camera.transform_point(local.extend(0.0)).truncate()
 }
 
-/// Keeps every fitted [`SphCamera`] framing the tank.
+/// Keeps every fitted [`ParticleCamera`] framing the tank.
 pub(crate) fn fit_cameras(
     params: Res<SphParams>,
     insets: Res<ViewInsets>,
     window: Single<&Window, With<PrimaryWindow>>,
-    mut cameras: Query<(&SphCamera, &mut Projection, &mut Transform)>,
+    mut cameras: Query<(&ParticleCamera, &mut Projection, &mut Transform)>,
 ) {
     let window_size = Vec2::new(window.width(), window.height());
     for (camera, mut projection, mut transform) in &mut cameras {
