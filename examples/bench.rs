@@ -29,6 +29,7 @@ use bevy_sph2d::fluid::slices::SliceFluid;
 use bevy_sph2d::fluid::{
     FluidBlock, PressureSolver, ScenarioKind, SphParams, SphScenario, SphSolver, Tank,
 };
+use bevy_sph2d::gravity::Multipole;
 use bevy_sph2d::prelude::*;
 use clap::error::ErrorKind;
 use clap::{CommandFactory, Parser, ValueEnum};
@@ -73,6 +74,16 @@ struct Cli {
     /// Barnes-Hut opening angle.
     #[arg(long, default_value_t = 1.0)]
     theta: f32,
+    /// Gravity's far field: point masses, or with quadrupole moments.
+    #[arg(long, value_enum, default_value_t = Expansion::Monopole)]
+    multipole: Expansion,
+}
+
+/// Gravity's far-field expansion.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum Expansion {
+    Monopole,
+    Quadrupole,
 }
 
 /// The fluid's pressure solver.
@@ -313,6 +324,7 @@ fn realtime_bench(cli: &Cli) {
 
 /// Seconds per tick of the gravity plugin on a galaxy disc of `bodies` bodies.
 fn time_gravity(bodies: usize, steps: usize, threads: usize, params: GravityParams) -> f64 {
+    let multipole = params.multipole;
     let mut app = App::new();
     app.add_plugins((
         MinimalPlugins.set(bevy_sph2d::task_pool_plugin(threads)),
@@ -332,12 +344,13 @@ fn time_gravity(bodies: usize, steps: usize, threads: usize, params: GravityPara
     let stats = app.world().resource::<GravityStats>();
     assert_eq!(stats.bodies, bodies, "the ECS lost bodies");
     eprintln!(
-        "{} bodies, {} nodes, field {:.1} ms of {:.1} ms per tick, {} sums",
+        "{} bodies, {} nodes, field {:.1} ms of {:.1} ms per tick, {} sums, {}",
         stats.bodies,
         stats.nodes,
         stats.field_ms,
         1000.0 * seconds,
-        bevy_sph2d::gravity::simd_path()
+        bevy_sph2d::gravity::simd_path(),
+        multipole.label()
     );
     seconds
 }
@@ -351,6 +364,10 @@ fn gravity_bench(cli: &Cli) {
         gravitational_constant: 1.0,
         theta,
         softening: 0.001,
+        multipole: match cli.multipole {
+            Expansion::Monopole => Multipole::Monopole,
+            Expansion::Quadrupole => Multipole::Quadrupole,
+        },
         ..default()
     };
     if let Err(error) = params.validate() {

@@ -1,5 +1,7 @@
 //! What the parameter resources ([`SphParams`](crate::fluid::SphParams),
-//! [`GravityParams`](crate::gravity::GravityParams)) share: one error type for a refused value.
+//! [`GravityParams`](crate::gravity::GravityParams)) share: one error type for a refused value,
+//! one status resource, one system that adopts a valid change, and one table of numeric fields
+//! that validation and the panel both read.
 
 use core::fmt;
 
@@ -83,3 +85,103 @@ pub(crate) fn apply_params<P: Params>(
         }
     }
 }
+
+/// One numeric field of a parameters type `P` as validation and the panel see it: its name,
+/// label and unit, the values validation accepts, and the range and scale of the panel's
+/// slider. A new numeric field is one row of [`ParamTable::FIELDS`].
+#[derive(Debug)]
+pub struct ParamField<P: 'static> {
+    /// The field's path, as errors name it.
+    pub field: &'static str,
+    /// The panel's label.
+    pub label: &'static str,
+    /// The unit ("" for none).
+    pub unit: &'static str,
+    /// The accepted values, inclusive (`positive`: above zero up to the maximum).
+    pub valid: (f32, f32),
+    /// Zero excluded.
+    pub positive: bool,
+    /// The panel slider's range (within `valid`).
+    pub slider: (f32, f32),
+    /// A logarithmic slider.
+    pub logarithmic: bool,
+    /// Reads the field.
+    pub get: fn(&P) -> f32,
+    /// Writes the field.
+    pub set: fn(&mut P, f32),
+}
+
+impl<P> Clone for ParamField<P> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+
+impl<P> Copy for ParamField<P> {}
+
+/// A parameters type whose numeric fields with a plain range are listed in one table.
+pub trait ParamTable: Sized + 'static {
+    /// The type's name, as errors give it (`"SphParams"`).
+    const OWNER: &'static str;
+    /// The numeric fields with a plain range, in the panel's order (fields whose range depends
+    /// on others, vectors, counts and switches are checked by the type's `validate` itself).
+    const FIELDS: &'static [ParamField<Self>];
+
+    /// The row of `field`.
+    fn field(field: &str) -> Option<&'static ParamField<Self>> {
+        Self::FIELDS.iter().find(|row| row.field == field)
+    }
+
+    /// Checks every row of the table; the first problem is returned.
+    fn check_fields(&self) -> Result<(), ParamsError> {
+        Self::FIELDS.iter().try_for_each(|row| row.check(self))
+    }
+}
+
+impl<P: ParamTable> ParamField<P> {
+    /// Whether `params` has an accepted value here; the error names the value and the range.
+    pub fn check(&self, params: &P) -> Result<(), ParamsError> {
+        let value = (self.get)(params);
+        let (min, max) = self.valid;
+        let unit = self.unit;
+        let ok = value.is_finite()
+            && value <= max
+            && if self.positive {
+                value > 0.0
+            } else {
+                value >= min
+            };
+        if ok {
+            return Ok(());
+        }
+        Err(ParamsError {
+            owner: P::OWNER,
+            field: self.field,
+            message: if self.positive {
+                format!("{value} {unit} must be positive and at most {max} {unit}")
+            } else {
+                format!("{value} {unit} is outside {min}..={max} {unit}")
+            },
+        })
+    }
+}
+
+/// A [`ParamField`] row for the field at `$path` (`rest_density`, `dfsph.cfl_number`): its
+/// name, getter and setter come from the path.
+macro_rules! param_field {
+    ($($path:ident).+, $label:expr, $unit:expr, $valid:expr, $positive:expr, $slider:expr,
+     $log:expr) => {
+        $crate::params::ParamField {
+            field: stringify!($($path).+),
+            label: $label,
+            unit: $unit,
+            valid: $valid,
+            positive: $positive,
+            slider: $slider,
+            logarithmic: $log,
+            get: |p| p.$($path).+,
+            set: |p, v| p.$($path).+ = v,
+        }
+    };
+}
+pub(crate) use param_field;

@@ -5,7 +5,7 @@ use bevy::prelude::*;
 use bevy::time::TimeUpdateStrategy;
 use bevy_sph2d::fluid::{FluidBlock, Position, SphParams, SphPlugin, Velocity};
 use bevy_sph2d::gravity::{
-    GalaxyDisc, Gravity, GravityParams, GravityPlugin, GravityStats, Mass, QuadTree,
+    FieldQuery, GalaxyDisc, GravityParams, GravityPlugin, GravityStats, Mass, Multipole, QuadTree,
     direct_field_at,
 };
 use rand::{RngExt, SeedableRng};
@@ -42,7 +42,7 @@ fn tree_matches_direct_summation_and_improves_as_theta_falls() {
     let mut tree = QuadTree::new();
     tree.build(&positions, &masses, 8);
     let errors = |theta: f32| {
-        let g = Gravity {
+        let g = FieldQuery {
             constant: 1.0,
             theta,
             softening: 0.0,
@@ -323,7 +323,7 @@ fn the_plugins_group_walk_is_at_least_as_accurate_as_before_the_simd_kernel() {
     tree.build(&positions, &masses, 8);
     let mut fields = Vec::new();
     let mut errors = |theta: f32| {
-        let g = Gravity {
+        let g = FieldQuery {
             constant: 1.0,
             theta,
             softening: 0.0,
@@ -346,4 +346,31 @@ fn the_plugins_group_walk_is_at_least_as_accurate_as_before_the_simd_kernel() {
     println!("group walk: median relative error by theta: {by_theta:?}");
     let at_half = by_theta[3].1;
     assert!(at_half <= 0.00415, "median error {at_half} at theta 0.5");
+    // With quadrupole moments every θ is more accurate.
+    let mut tree = QuadTree::new();
+    tree.set_multipole(Multipole::Quadrupole);
+    tree.build(&positions, &masses, 8);
+    let mut fields = Vec::new();
+    for &(theta, monopole) in &by_theta {
+        let g = FieldQuery {
+            constant: 1.0,
+            theta,
+            softening: 0.0,
+        };
+        tree.fields(&g, &mut fields);
+        let relative: Vec<f32> = positions
+            .iter()
+            .zip(&fields)
+            .map(|(&p, field)| {
+                let exact = direct_field_at(p, &positions, &masses, &g).acceleration;
+                (field.acceleration - exact).length() / exact.length()
+            })
+            .collect();
+        let quadrupole = median(relative);
+        println!("group walk, quadrupole: theta {theta}: {quadrupole}");
+        assert!(
+            quadrupole < 0.6 * monopole,
+            "θ {theta}: {quadrupole} vs {monopole}"
+        );
+    }
 }

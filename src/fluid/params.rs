@@ -4,6 +4,7 @@
 use super::boundary::Tank;
 use super::kernels::{self, KernelKind};
 use super::solver::SphConstants;
+use crate::params::{ParamField, ParamTable, param_field};
 use bevy::prelude::*;
 
 /// Standard gravity, m/s².
@@ -149,92 +150,17 @@ impl Default for SphParams {
 /// Why a [`SphParams`] value was refused (the crate's one [`ParamsError`](crate::params::ParamsError)).
 pub type SphParamsError = crate::params::ParamsError;
 
-/// One numeric field of [`SphParams`] as validation and the panel see it: its name, label and
-/// unit, the values validation accepts, and the range and scale of the panel's slider. A new
-/// numeric field is one row of [`SphParams::FIELDS`].
-#[derive(Debug, Clone, Copy)]
-pub struct ParamField {
-    /// The field's path, as errors name it.
-    pub field: &'static str,
-    /// The panel's label.
-    pub label: &'static str,
-    /// The unit ("" for none).
-    pub unit: &'static str,
-    /// The accepted values, inclusive (`positive`: above zero up to the maximum).
-    pub valid: (f32, f32),
-    /// Zero excluded.
-    pub positive: bool,
-    /// The panel slider's range (within `valid`).
-    pub slider: (f32, f32),
-    /// A logarithmic slider.
-    pub logarithmic: bool,
-    /// Reads the field.
-    pub get: fn(&SphParams) -> f32,
-    /// Writes the field.
-    pub set: fn(&mut SphParams, f32),
-}
+/// One numeric field of [`SphParams`]: see [`ParamField`].
+pub type SphParamField = ParamField<SphParams>;
 
-/// A [`ParamField`] row for the field at `$path` (`rest_density`, `dfsph.cfl_number`): its
-/// name, getter and setter come from the path.
-macro_rules! param_field {
-    ($($path:ident).+, $label:expr, $unit:expr, $valid:expr, $positive:expr, $slider:expr,
-     $log:expr) => {
-        ParamField {
-            field: stringify!($($path).+),
-            label: $label,
-            unit: $unit,
-            valid: $valid,
-            positive: $positive,
-            slider: $slider,
-            logarithmic: $log,
-            get: |p| p.$($path).+,
-            set: |p, v| p.$($path).+ = v,
-        }
-    };
-}
+impl ParamTable for SphParams {
+    const OWNER: &'static str = "SphParams";
 
-impl ParamField {
-    /// Whether `params` has an accepted value here; the error names the value and the range.
-    pub fn check(&self, params: &SphParams) -> Result<(), SphParamsError> {
-        let value = (self.get)(params);
-        let (min, max) = self.valid;
-        let unit = self.unit;
-        let ok = value.is_finite()
-            && value <= max
-            && if self.positive {
-                value > 0.0
-            } else {
-                value >= min
-            };
-        if ok {
-            return Ok(());
-        }
-        Err(SphParamsError {
-            owner: "SphParams",
-            field: self.field,
-            message: if self.positive {
-                format!("{value} {unit} must be positive and at most {max} {unit}")
-            } else {
-                format!("{value} {unit} is outside {min}..={max} {unit}")
-            },
-        })
-    }
-
-    /// The row of `field` in [`SphParams::FIELDS`].
-    pub fn of(field: &str) -> Option<&'static ParamField> {
-        SphParams::FIELDS.iter().find(|f| f.field == field)
-    }
-}
-
-/// Most wall particles a tank may need before validation refuses it (memory guard).
-pub const MAX_WALL_PARTICLES: u64 = 4_000_000;
-
-impl SphParams {
     /// The numeric fields with a plain range, in the panel's order (the fields whose range
     /// depends on others, the vectors and the counts are checked in [`validate`](Self::validate)
     /// itself).
     #[rustfmt::skip]
-    pub const FIELDS: &'static [ParamField] = &[
+    const FIELDS: &'static [ParamField<Self>] = &[
         // path, label, unit, accepted range, zero excluded, slider range, logarithmic
         param_field!(rest_density, "rest density ρ₀", "kg/m³", (0.0, 1.0e5), true, (0.5, 5000.0), true),
         param_field!(speed_of_sound, "speed of sound c₀", "m/s", (0.0, 1.0e4), true, (1.0, 300.0), true),
@@ -248,7 +174,12 @@ impl SphParams {
         param_field!(dfsph.density_tolerance, "density tolerance", "", (1.0e-6, 0.1), false, (1.0e-6, 0.01), true),
         param_field!(dfsph.divergence_tolerance, "divergence tolerance", "", (1.0e-6, 1.0), false, (1.0e-5, 0.1), true),
     ];
+}
 
+/// Most wall particles a tank may need before validation refuses it (memory guard).
+pub const MAX_WALL_PARTICLES: u64 = 4_000_000;
+
+impl SphParams {
     /// Water in a 2 m × 1.2 m tank at 2 cm spacing, incompressible ([`PressureSolver::Dfsph`],
     /// support 2 spacings: about 12 neighbours, as SPlisHSPlasH's default; the lattice gradient
     /// correction keeps its hydrostatic pressure exact). The speed of sound only scales the artificial viscosity here, and is

@@ -1,6 +1,7 @@
 //! Pure point-mass sums, the inner loop of gravity: the softened acceleration and potential at a
-//! point from a list of masses, on the widest SIMD the CPU has (AVX-512, AVX2, or the baseline),
-//! picked once at run time.
+//! point from a list of masses ([`sum_point_masses`]) or of tree nodes with their quadrupole
+//! moments ([`sum_quadrupoles`]), on the widest SIMD the CPU has (AVX-512, AVX2, or the
+//! baseline), picked at run time.
 //!
 //! Every path computes the same thing in the same order, so the results are identical bit for
 //! bit on every path and every x86 CPU (and on any other target):
@@ -40,14 +41,102 @@ pub fn sum_point_masses(p: Vec2, x: &[f32], y: &[f32], m: &[f32], eps_sq: f32) -
     {
         if std::arch::is_x86_feature_detected!("avx512f") {
             // SAFETY: the CPU has AVX-512F, checked just above.
-            return unsafe { sum_avx512(p, x, y, m, eps_sq) };
+            return unsafe { masses_avx512(p, x, y, m, eps_sq) };
         }
         if std::arch::is_x86_feature_detected!("avx2") {
             // SAFETY: the CPU has AVX2, checked just above.
-            return unsafe { sum_avx2(p, x, y, m, eps_sq) };
+            return unsafe { masses_avx2(p, x, y, m, eps_sq) };
         }
     }
-    sum_lanes(p, x, y, m, eps_sq)
+    sum_masses(p, x, y, m, eps_sq)
+}
+
+/// Tree nodes as sources with their quadrupole moments, structure of arrays: centre of mass
+/// (`x`, `y`), mass `m`, and the moment `Q = Σ mᵢ (3 sᵢsᵢᵀ − |sᵢ|² I)` of the bodies at `sᵢ`
+/// from the centre (`xx`, `yy`, `xy`).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Quadrupoles {
+    /// Centre of mass, x, m.
+    pub x: Vec<f32>,
+    /// Centre of mass, y, m.
+    pub y: Vec<f32>,
+    /// Mass, kg.
+    pub m: Vec<f32>,
+    /// `Qxx`, kg·m².
+    pub xx: Vec<f32>,
+    /// `Qyy`, kg·m².
+    pub yy: Vec<f32>,
+    /// `Qxy`, kg·m².
+    pub xy: Vec<f32>,
+}
+
+impl Quadrupoles {
+    /// No sources.
+    pub fn clear(&mut self) {
+        for v in self.columns() {
+            v.clear();
+        }
+    }
+
+    /// Adds a node at centre `c` of mass `m` and moment `q = [Qxx, Qyy, Qxy]`.
+    pub fn push(&mut self, c: Vec2, m: f32, q: [f32; 3]) {
+        for (v, value) in self
+            .columns()
+            .into_iter()
+            .zip([c.x, c.y, m, q[0], q[1], q[2]])
+        {
+            v.push(value);
+        }
+    }
+
+    /// Pads with zero masses (which add exactly nothing) up to whole SIMD chunks.
+    pub fn pad(&mut self) {
+        let padded = self.x.len().div_ceil(LANES) * LANES;
+        for v in self.columns() {
+            v.resize(padded, 0.0);
+        }
+    }
+
+    /// Sources held.
+    pub fn len(&self) -> usize {
+        self.x.len()
+    }
+
+    /// Whether there is no source.
+    pub fn is_empty(&self) -> bool {
+        self.x.is_empty()
+    }
+
+    fn columns(&mut self) -> [&mut Vec<f32>; 6] {
+        [
+            &mut self.x,
+            &mut self.y,
+            &mut self.m,
+            &mut self.xx,
+            &mut self.yy,
+            &mut self.xy,
+        ]
+    }
+}
+
+/// Acceleration (per unit `G`) and potential at `p` from `nodes`, each a point mass plus its
+/// quadrupole term, softened as [`sum_point_masses`]:
+/// `a = m d/r³ − Q d/r⁵ + (5/2)(dᵀQd) d/r⁷` and `φ = −m/r − (dᵀQd)/(2r⁵)` for `d` from `p` to
+/// the centre and `r² = |d|² + ε²`. Sources of zero mass (padding) or exactly at `p` are left
+/// out.
+pub fn sum_quadrupoles(p: Vec2, nodes: &Quadrupoles, eps_sq: f32) -> (Vec2, f32) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::arch::is_x86_feature_detected!("avx512f") {
+            // SAFETY: the CPU has AVX-512F, checked just above.
+            return unsafe { quadrupoles_avx512(p, nodes, eps_sq) };
+        }
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU has AVX2, checked just above.
+            return unsafe { quadrupoles_avx2(p, nodes, eps_sq) };
+        }
+    }
+    sum_nodes(p, nodes, eps_sq)
 }
 
 /// The SIMD path in use on this CPU, for benchmark lines: `avx512`, `avx2` or `baseline`.
@@ -66,27 +155,51 @@ pub fn simd_path() -> &'static str {
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f")]
-fn sum_avx512(p: Vec2, x: &[f32], y: &[f32], m: &[f32], eps_sq: f32) -> (Vec2, f32) {
-    sum_lanes(p, x, y, m, eps_sq)
+fn masses_avx512(p: Vec2, x: &[f32], y: &[f32], m: &[f32], eps_sq: f32) -> (Vec2, f32) {
+    sum_masses(p, x, y, m, eps_sq)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-fn sum_avx2(p: Vec2, x: &[f32], y: &[f32], m: &[f32], eps_sq: f32) -> (Vec2, f32) {
-    sum_lanes(p, x, y, m, eps_sq)
+fn masses_avx2(p: Vec2, x: &[f32], y: &[f32], m: &[f32], eps_sq: f32) -> (Vec2, f32) {
+    sum_masses(p, x, y, m, eps_sq)
 }
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+fn quadrupoles_avx512(p: Vec2, nodes: &Quadrupoles, eps_sq: f32) -> (Vec2, f32) {
+    sum_nodes(p, nodes, eps_sq)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn quadrupoles_avx2(p: Vec2, nodes: &Quadrupoles, eps_sq: f32) -> (Vec2, f32) {
+    sum_nodes(p, nodes, eps_sq)
+}
+
+/// One chunk of sources, one per lane.
+type Chunk = [f32; LANES];
 
 /// Accumulators of one point's sum, one per lane.
 struct Lanes {
-    ax: [f32; LANES],
-    ay: [f32; LANES],
-    phi: [f32; LANES],
+    ax: Chunk,
+    ay: Chunk,
+    phi: Chunk,
 }
 
 impl Lanes {
-    /// Adds `LANES` masses, one per lane (the compiler turns this into whole-register SIMD).
+    fn new() -> Self {
+        Self {
+            ax: [0.0; LANES],
+            ay: [0.0; LANES],
+            phi: [0.0; LANES],
+        }
+    }
+
+    /// Adds `LANES` point masses, one per lane (the compiler turns this into whole-register
+    /// SIMD).
     #[inline(always)]
-    fn add(&mut self, p: Vec2, x: &[f32; LANES], y: &[f32; LANES], m: &[f32; LANES], eps: f32) {
+    fn add_masses(&mut self, p: Vec2, x: &Chunk, y: &Chunk, m: &Chunk, eps: f32) {
         for j in 0..LANES {
             let dx = x[j] - p.x;
             let dy = y[j] - p.y;
@@ -101,6 +214,33 @@ impl Lanes {
         }
     }
 
+    /// Adds `LANES` quadrupole sources, one per lane.
+    #[inline(always)]
+    fn add_quadrupoles(&mut self, p: Vec2, q: [&Chunk; 6], eps: f32) {
+        let [x, y, m, xx, yy, xy] = q;
+        for j in 0..LANES {
+            let dx = x[j] - p.x;
+            let dy = y[j] - p.y;
+            let r2 = dx * dx + dy * dy;
+            // Padding has zero mass and moment: left out before r⁻⁷ could overflow.
+            let inv = if r2 > 0.0 && m[j] > 0.0 {
+                rsqrt(r2 + eps)
+            } else {
+                0.0
+            };
+            let inv2 = inv * inv;
+            let m_inv = m[j] * inv;
+            let inv5 = inv * inv2 * inv2;
+            let qx = xx[j] * dx + xy[j] * dy;
+            let qy = xy[j] * dx + yy[j] * dy;
+            let dqd = dx * qx + dy * qy;
+            let radial = m_inv * inv2 + 2.5 * dqd * inv5 * inv2;
+            self.ax[j] += dx * radial - qx * inv5;
+            self.ay[j] += dy * radial - qy * inv5;
+            self.phi[j] -= m_inv + 0.5 * dqd * inv5;
+        }
+    }
+
     /// The lanes added in one fixed pairwise tree.
     #[inline(always)]
     fn total(&self) -> (Vec2, f32) {
@@ -112,7 +252,7 @@ impl Lanes {
 }
 
 #[inline(always)]
-fn pairwise(mut v: [f32; LANES]) -> f32 {
+fn pairwise(mut v: Chunk) -> f32 {
     let mut width = LANES / 2;
     while width > 0 {
         for j in 0..width {
@@ -123,32 +263,53 @@ fn pairwise(mut v: [f32; LANES]) -> f32 {
     v[0]
 }
 
+/// The chunk of `v` at `start` (which has `LANES` values from there on), borrowed.
 #[inline(always)]
-fn sum_lanes(p: Vec2, x: &[f32], y: &[f32], m: &[f32], eps_sq: f32) -> (Vec2, f32) {
+fn whole(v: &[f32], start: usize) -> &Chunk {
+    v[start..start + LANES].try_into().expect("a whole chunk")
+}
+
+/// The values of `v` from `start` on (fewer than `LANES`), padded with `fill`.
+#[inline(always)]
+fn rest(v: &[f32], start: usize, fill: f32) -> Chunk {
+    let mut padded = [fill; LANES];
+    padded[..v.len() - start].copy_from_slice(&v[start..]);
+    padded
+}
+
+#[inline(always)]
+fn sum_masses(p: Vec2, x: &[f32], y: &[f32], m: &[f32], eps_sq: f32) -> (Vec2, f32) {
     let n = x.len().min(y.len()).min(m.len());
     let (x, y, m) = (&x[..n], &y[..n], &m[..n]);
-    let mut lanes = Lanes {
-        ax: [0.0; LANES],
-        ay: [0.0; LANES],
-        phi: [0.0; LANES],
-    };
-    let whole = n / LANES * LANES;
-    for ((x, y), m) in x[..whole]
-        .chunks_exact(LANES)
-        .zip(y[..whole].chunks_exact(LANES))
-        .zip(m[..whole].chunks_exact(LANES))
-    {
-        let chunk = |s: &[f32]| -> [f32; LANES] { s.try_into().expect("a whole chunk") };
-        lanes.add(p, &chunk(x), &chunk(y), &chunk(m), eps_sq);
+    let mut lanes = Lanes::new();
+    let end = n / LANES * LANES;
+    for k in (0..end).step_by(LANES) {
+        lanes.add_masses(p, whole(x, k), whole(y, k), whole(m, k), eps_sq);
     }
-    if whole < n {
+    if end < n {
         // The rest in the same lanes, padded with zero masses at `p` (left out exactly).
-        let (mut tx, mut ty, mut tm) = ([p.x; LANES], [p.y; LANES], [0.0; LANES]);
-        let rest = n - whole;
-        tx[..rest].copy_from_slice(&x[whole..]);
-        ty[..rest].copy_from_slice(&y[whole..]);
-        tm[..rest].copy_from_slice(&m[whole..]);
-        lanes.add(p, &tx, &ty, &tm, eps_sq);
+        let (x, y, m) = (rest(x, end, p.x), rest(y, end, p.y), rest(m, end, 0.0));
+        lanes.add_masses(p, &x, &y, &m, eps_sq);
+    }
+    lanes.total()
+}
+
+#[inline(always)]
+fn sum_nodes(p: Vec2, q: &Quadrupoles, eps_sq: f32) -> (Vec2, f32) {
+    let columns = [&q.x, &q.y, &q.m, &q.xx, &q.yy, &q.xy];
+    let n = columns.iter().map(|c| c.len()).min().unwrap_or(0);
+    let [x, y, m, xx, yy, xy] = columns.map(|column| &column[..n]);
+    let mut lanes = Lanes::new();
+    let end = n / LANES * LANES;
+    for k in (0..end).step_by(LANES) {
+        let chunks = [x, y, m, xx, yy, xy].map(|column| whole(column, k));
+        lanes.add_quadrupoles(p, chunks, eps_sq);
+    }
+    if end < n {
+        // The rest padded with zero masses (left out exactly).
+        let padded = [x, y, m, xx, yy, xy].map(|column| rest(column, end, 0.0));
+        let [a, b, c, d, e, f] = &padded;
+        lanes.add_quadrupoles(p, [a, b, c, d, e, f], eps_sq);
     }
     lanes.total()
 }
@@ -188,15 +349,15 @@ mod tests {
             Vec2::new(9.0, 9.0),
         ] {
             for eps_sq in [0.0, 1e-4] {
-                let reference = sum_lanes(p, &x, &y, &m, eps_sq);
+                let reference = sum_masses(p, &x, &y, &m, eps_sq);
                 assert_eq!(sum_point_masses(p, &x, &y, &m, eps_sq), reference);
                 #[cfg(target_arch = "x86_64")]
                 {
                     if std::arch::is_x86_feature_detected!("avx2") {
-                        assert_eq!(unsafe { sum_avx2(p, &x, &y, &m, eps_sq) }, reference);
+                        assert_eq!(unsafe { masses_avx2(p, &x, &y, &m, eps_sq) }, reference);
                     }
                     if std::arch::is_x86_feature_detected!("avx512f") {
-                        assert_eq!(unsafe { sum_avx512(p, &x, &y, &m, eps_sq) }, reference);
+                        assert_eq!(unsafe { masses_avx512(p, &x, &y, &m, eps_sq) }, reference);
                     }
                 }
                 // Against a plain f64 sum.
@@ -234,5 +395,69 @@ mod tests {
         let padded = sum_point_masses(p, &[2.0, 0.0, 7.0], &[2.0, 0.0, 3.0], &[1.0, 0.0, 0.0], 0.0);
         assert_eq!(one, padded);
         assert!((one.0.x - 1.0).abs() < 1e-6 && (one.1 + 1.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn a_quadrupole_source_matches_its_bodies_far_away_better_than_a_point_mass() {
+        // Four bodies about (0.3, -0.2); the moment from the definition.
+        let c = Vec2::new(0.3, -0.2);
+        let bodies = [
+            (0.1, 0.05, 1.0),
+            (-0.08, 0.02, 2.0),
+            (0.02, -0.1, 1.5),
+            (-0.04, 0.03, 0.5),
+        ];
+        let m_total: f32 = bodies.iter().map(|b| b.2).sum();
+        let com = bodies
+            .iter()
+            .fold(Vec2::ZERO, |a, b| a + Vec2::new(b.0, b.1) * b.2)
+            / m_total;
+        let mut q = [0.0f32; 3];
+        for &(sx, sy, m) in &bodies {
+            let s = Vec2::new(sx, sy) - com;
+            q[0] += m * (3.0 * s.x * s.x - s.length_squared());
+            q[1] += m * (3.0 * s.y * s.y - s.length_squared());
+            q[2] += m * 3.0 * s.x * s.y;
+        }
+        let x: Vec<f32> = bodies.iter().map(|b| c.x + b.0).collect();
+        let y: Vec<f32> = bodies.iter().map(|b| c.y + b.1).collect();
+        let m: Vec<f32> = bodies.iter().map(|b| b.2).collect();
+        let mut source = Quadrupoles::default();
+        source.push(c + com, m_total, q);
+        source.pad();
+        for p in [
+            Vec2::new(5.0, 1.0),
+            Vec2::new(-4.0, -6.0),
+            Vec2::new(0.3, 7.0),
+        ] {
+            let exact = sum_point_masses(p, &x, &y, &m, 0.0);
+            let point = sum_point_masses(p, &[c.x + com.x], &[c.y + com.y], &[m_total], 0.0);
+            let quad = sum_quadrupoles(p, &source, 0.0);
+            let error = |a: (Vec2, f32)| (a.0 - exact.0).length() / exact.0.length();
+            assert!(
+                error(quad) < 0.2 * error(point),
+                "{p}: {} vs {}",
+                error(quad),
+                error(point)
+            );
+            assert!((quad.1 - exact.1).abs() < 0.2 * (point.1 - exact.1).abs());
+        }
+        // Every path gives the same bits, and a zero moment is a point mass.
+        let p = Vec2::new(1.0, 2.0);
+        #[cfg(target_arch = "x86_64")]
+        {
+            let reference = sum_nodes(p, &source, 1e-3);
+            if std::arch::is_x86_feature_detected!("avx2") {
+                assert_eq!(unsafe { quadrupoles_avx2(p, &source, 1e-3) }, reference);
+            }
+            if std::arch::is_x86_feature_detected!("avx512f") {
+                assert_eq!(unsafe { quadrupoles_avx512(p, &source, 1e-3) }, reference);
+            }
+        }
+        let mut plain = Quadrupoles::default();
+        plain.push(c, 2.0, [0.0; 3]);
+        let (a, phi) = sum_quadrupoles(p, &plain, 0.0);
+        let (b, psi) = sum_point_masses(p, &[c.x], &[c.y], &[2.0], 0.0);
+        assert!((a - b).length() <= 1e-6 * b.length() && (phi - psi).abs() <= 1e-6 * psi.abs());
     }
 }

@@ -17,7 +17,7 @@ use bevy::prelude::*;
 
 pub use kernel::simd_path;
 pub use params::{GravityParams, GravityParamsError};
-pub use quadtree::{Field, Gravity, QuadTree, direct_field_at};
+pub use quadtree::{Field, FieldQuery, Multipole, QuadTree, direct_field_at};
 pub use scenario::{GalaxyDisc, GravityScenario};
 pub use systems::{GravitySolver, GravityStats};
 
@@ -141,6 +141,7 @@ impl Plugin for GravityPlugin {
             .register_type::<GravityPotential>()
             .register_type::<GravitySlot>()
             .register_type::<GravityScenario>()
+            .register_type::<Multipole>()
             .insert_resource(self.params.clone())
             .init_resource::<systems::GravitySolver>()
             .init_resource::<GravityStats>()

@@ -1,6 +1,8 @@
 //! Runtime-tunable gravity parameters and their validation. See
 //! [`GravityPlugin`](crate::gravity::GravityPlugin).
 
+use super::quadtree::Multipole;
+use crate::params::{ParamField, ParamTable, param_field};
 use bevy::prelude::*;
 
 /// Barnes-Hut gravity parameters. Edit them at any time; every change is validated and a bad one
@@ -21,6 +23,9 @@ pub struct GravityParams {
     pub leaf_capacity: u32,
     /// Sum every pair exactly (O(n²)) instead of using the tree: for checking.
     pub direct_sum: bool,
+    /// How far the tree expands a node's far field: point masses, or with quadrupole moments
+    /// (the same accuracy at a larger θ).
+    pub multipole: Multipole,
 }
 
 impl Default for GravityParams {
@@ -31,6 +36,7 @@ impl Default for GravityParams {
             softening: 0.01,
             leaf_capacity: 8,
             direct_sum: false,
+            multipole: Multipole::Monopole,
         }
     }
 }
@@ -39,29 +45,22 @@ impl Default for GravityParams {
 /// [`ParamsError`](crate::params::ParamsError)).
 pub type GravityParamsError = crate::params::ParamsError;
 
+impl ParamTable for GravityParams {
+    const OWNER: &'static str = "GravityParams";
+
+    #[rustfmt::skip]
+    const FIELDS: &'static [ParamField<Self>] = &[
+        // path, label, unit, accepted range, zero excluded, slider range, logarithmic
+        param_field!(gravitational_constant, "G", "m³/(kg·s²)", (0.0, 1.0e12), false, (1.0e-12, 1.0e3), true),
+        param_field!(theta, "opening angle θ", "", (0.0, 2.0), false, (0.0, 1.5), false),
+        param_field!(softening, "softening ε", "m", (0.0, 1.0e9), false, (0.0, 0.2), false),
+    ];
+}
+
 impl GravityParams {
     /// Checks every field; the first problem is returned with the field, value and range.
     pub fn validate(&self) -> Result<(), GravityParamsError> {
-        let check = |field: &'static str, value: f32, min: f32, max: f32, unit: &str| {
-            if value.is_finite() && value >= min && value <= max {
-                Ok(())
-            } else {
-                Err(GravityParamsError {
-                    owner: "GravityParams",
-                    field,
-                    message: format!("{value} {unit} is outside {min}..={max} {unit}"),
-                })
-            }
-        };
-        check(
-            "gravitational_constant",
-            self.gravitational_constant,
-            0.0,
-            1.0e12,
-            "m³/(kg·s²)",
-        )?;
-        check("theta", self.theta, 0.0, 2.0, "")?;
-        check("softening", self.softening, 0.0, 1.0e9, "m")?;
+        self.check_fields()?;
         if !(1..=64).contains(&self.leaf_capacity) {
             return Err(GravityParamsError {
                 owner: "GravityParams",
@@ -114,6 +113,18 @@ mod tests {
             let error = params.validate().unwrap_err();
             assert_eq!(error.field, field);
             assert!(error.to_string().contains(field));
+        }
+    }
+
+    #[test]
+    fn every_slider_lies_inside_what_validation_accepts() {
+        for row in GravityParams::FIELDS {
+            for value in [row.slider.0, row.slider.1] {
+                let mut p = GravityParams::default();
+                (row.set)(&mut p, value);
+                assert_eq!((row.get)(&p), value, "{}", row.field);
+                assert_eq!(p.validate(), Ok(()), "{} = {value}", row.field);
+            }
         }
     }
 }

@@ -5,7 +5,7 @@
 
 use super::params::{GravityParams, GravityParamsError};
 use super::quadtree::Field;
-use super::quadtree::{Gravity, QuadTree, direct_field_at};
+use super::quadtree::{FieldQuery, QuadTree, direct_field_at};
 use super::{GravityAcceleration, GravityPotential, GravitySlot, Mass};
 use crate::body::{Position, Velocity};
 use crate::fluid::{Acceleration, FluidParticle};
@@ -100,7 +100,7 @@ pub(crate) fn compute_gravity_field(
         slot.set_if_neq(GravitySlot(index as u32));
     }
     let params = &solver.params;
-    let gravity = Gravity {
+    let gravity = FieldQuery {
         constant: params.gravitational_constant,
         theta: params.theta,
         softening: params.softening,
@@ -110,6 +110,7 @@ pub(crate) fn compute_gravity_field(
         let (tree, fields) = (&mut solver.tree, &mut solver.fields);
         let (positions, masses) = (&solver.positions, &solver.masses);
         let leaf_capacity = params.leaf_capacity as usize;
+        tree.set_multipole(params.multipole);
         crate::compute::region(|| {
             tree.build(positions, masses, leaf_capacity);
             tree.fields(&gravity, fields);

@@ -4,13 +4,13 @@
 mod widgets;
 
 use crate::control::{ResetSimulation, SimulationControl};
-use crate::fluid::params::ParamField;
 use crate::fluid::{
     KernelKind, LoadSlot, PressureSolver, SaveSlot, ScenarioKind, SnapshotSlot, SphParams,
     SphParamsStatus, SphScenario, SphStats,
 };
-use crate::gravity::{GravityParams, GravityStats};
+use crate::gravity::{GravityParams, GravityStats, Multipole};
 use crate::interact::{Pointer, PointerSettings, PointerTool};
+use crate::params::ParamTable;
 use crate::render::{
     BodyColor, BodyView, ColorMap, LiquidStyle, ParticleDraw, ParticleView, RenderMode, ViewInsets,
 };
@@ -495,9 +495,10 @@ fn fluid_section(ui: &mut egui::Ui, data: &mut PanelData, fluid: bool) {
 }
 
 /// The divergence-free solver's settings.
-/// The slider of one of [`SphParams::FIELDS`]: the label, unit, range and scale its row gives.
-fn field_slider(ui: &mut egui::Ui, p: &mut SphParams, field: &str) {
-    let Some(row) = ParamField::of(field) else {
+/// The slider of one row of `P`'s [`ParamTable::FIELDS`]: the label, unit, range and scale the
+/// row gives.
+fn field_slider<P: ParamTable>(ui: &mut egui::Ui, p: &mut P, field: &str) {
+    let Some(row) = P::field(field) else {
         return;
     };
     let mut value = (row.get)(p);
@@ -544,14 +545,17 @@ fn gravity_section(ui: &mut egui::Ui, data: &mut PanelData) {
         .default_open(true)
         .show(ui, |ui| {
             let mut g = (**gravity).clone();
-            ui.add(
-                egui::Slider::new(&mut g.gravitational_constant, 1.0e-12..=1.0e3)
-                    .logarithmic(true)
-                    .text("G (m³/(kg·s²))"),
-            );
-            param_slider(ui, &mut g.theta, 0.0..=1.5, "opening angle θ", "", false);
-            param_slider(ui, &mut g.softening, 0.0..=0.2, "softening ε", "m", false);
+            for row in GravityParams::FIELDS {
+                field_slider(ui, &mut g, row.field);
+            }
             ui.add(egui::Slider::new(&mut g.leaf_capacity, 1..=64).text("leaf capacity"));
+            enum_combo(
+                ui,
+                "far field",
+                &mut g.multipole,
+                &Multipole::ALL,
+                Multipole::label,
+            );
             ui.checkbox(&mut g.direct_sum, "exact direct sum (O(n²), for checking)");
             if g != **gravity {
                 **gravity = g;
