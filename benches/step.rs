@@ -5,8 +5,8 @@
 
 use bevy::prelude::*;
 use bevy::time::TimeUpdateStrategy;
-use bevy_sph2d::fluid::grid::NeighborGrid;
-use bevy_sph2d::fluid::slices::SliceFluid;
+use bevy_sph2d::fluid::NeighborGrid;
+use bevy_sph2d::fluid::SliceFluid;
 use bevy_sph2d::fluid::{FluidBlock, SphParams, SphPlugin, Tank};
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use std::time::Duration;

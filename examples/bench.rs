@@ -24,8 +24,8 @@
 
 use bevy::prelude::*;
 use bevy::time::TimeUpdateStrategy;
-use bevy_sph2d::fluid::scenario::SCENARIO_TANK;
-use bevy_sph2d::fluid::slices::SliceFluid;
+use bevy_sph2d::fluid::SCENARIO_TANK;
+use bevy_sph2d::fluid::SliceFluid;
 use bevy_sph2d::fluid::{
     FluidBlock, PressureSolver, ScenarioKind, SphParams, SphScenario, SphSolver, Tank,
 };

@@ -82,7 +82,7 @@ fn main() {
     let cli = Cli::parse();
     let mut rng = StdRng::seed_from_u64(cli.seed);
     let scenario = SphScenario::new(ScenarioKind::Tank, cli.particles);
-    let tank = bevy_sph2d::fluid::scenario::SCENARIO_TANK;
+    let tank = bevy_sph2d::fluid::SCENARIO_TANK;
     let base = SphParams {
         tank: Some(tank),
         particle_spacing: scenario.spacing(&tank),

@@ -38,7 +38,7 @@ impl SphDemoPlugin {
 ///   dropping frames (the panel shows the speed relative to real time).
 pub fn demo_params() -> SphParams {
     SphParams {
-        tank: Some(crate::fluid::scenario::SCENARIO_TANK),
+        tank: Some(crate::fluid::SCENARIO_TANK),
         speed_of_sound: 30.0,
         max_substeps: 40,
         ..SphParams::water()

@@ -43,9 +43,9 @@
 
 #![warn(missing_docs)]
 
-pub mod body;
-pub mod compute;
-pub mod control;
+mod body;
+mod compute;
+mod control;
 #[cfg(feature = "egui")]
 pub mod demo;
 pub mod fluid;
@@ -54,10 +54,21 @@ pub mod gravity;
 pub mod interact;
 #[cfg(feature = "egui")]
 pub mod panel;
-pub mod params;
+mod params;
 #[cfg(feature = "render")]
 pub mod render;
-pub mod schedule;
+mod schedule;
+
+pub use body::{Position, Velocity};
+pub use control::{
+    ResetSimulation, SimulationControl, SimulationControlPlugin, SimulationControlSystems,
+    simulation_running,
+};
+pub use params::{ParamField, ParamTable, ParamsError, ParamsStatus};
+pub use schedule::{
+    BodyForceSystems, ParticleSchedule, ParticleSchedulePlugin, ParticleSystems, SphSubstep,
+    SphSubstepSystems,
+};
 
 use bevy::app::{
     FixedUpdate, PluginGroup, PluginGroupBuilder, TaskPoolOptions, TaskPoolPlugin,

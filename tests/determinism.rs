@@ -4,7 +4,7 @@
 mod common;
 
 use bevy::prelude::*;
-use bevy_sph2d::fluid::slices::SliceFluid;
+use bevy_sph2d::fluid::SliceFluid;
 use bevy_sph2d::fluid::{FluidBlock, Obstacle, PressureSolver, SphParams, Tank};
 use common::*;
 use std::process::Command;

@@ -102,7 +102,7 @@ fn particles_spawned_outside_the_tank_are_brought_inside() {
 #[test]
 fn gravity_refuses_bad_parameters_through_the_same_pattern() {
     use bevy::time::TimeUpdateStrategy;
-    use bevy_sph2d::params::ParamsStatus;
+    use bevy_sph2d::ParamsStatus;
     let mut app = App::new();
     app.add_plugins((MinimalPlugins, GravityPlugin::default()))
         .insert_resource(TimeUpdateStrategy::FixedTimesteps(1));

@@ -53,7 +53,7 @@ pub struct Pressure(pub f32);
 /// next one. Solver state; games can ignore it.
 #[derive(Component, Reflect, Debug, Clone, Copy, Default, Deref, DerefMut, PartialEq)]
 #[reflect(Component, Default, Debug, PartialEq)]
-pub struct Stiffness(pub Vec2);
+pub(crate) struct Stiffness(pub Vec2);
 
 /// Where the particle sits in the solver's cell-sorted neighbour snapshot, and in which
 /// snapshot: written by [`SphSubstepSystems::Neighbors`](crate::fluid::SphSubstepSystems::Neighbors)
@@ -61,7 +61,7 @@ pub struct Stiffness(pub Vec2);
 /// Games can ignore it.
 #[derive(Component, Reflect, Debug, Clone, Copy, PartialEq, Eq)]
 #[reflect(Component, Default, Debug, PartialEq)]
-pub struct NeighborSlot {
+pub(crate) struct NeighborSlot {
     /// Sorted slot in the snapshot.
     pub slot: u32,
     /// The snapshot generation the slot belongs to (0: none yet).

@@ -110,7 +110,12 @@ impl NeighborGrid {
 
     /// [`rebuild_with_budget`](Self::rebuild_with_budget), binning points into cells on
     /// `parallel` (the counting sort itself is sequential).
-    pub fn rebuild_with(&mut self, points: &[Vec2], max_cells: usize, parallel: &impl Parallel) {
+    pub(crate) fn rebuild_with(
+        &mut self,
+        points: &[Vec2],
+        max_cells: usize,
+        parallel: &impl Parallel,
+    ) {
         self.block_occupied.clear();
         let n = points.len();
         if n == 0 {

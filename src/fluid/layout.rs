@@ -14,7 +14,7 @@ use core::sync::atomic::{AtomicU64, Ordering};
 
 /// Width of the lane batches the neighbour loops work in: four `f32` lanes (one SSE or NEON
 /// register).
-pub const LANES: usize = 4;
+pub(crate) const LANES: usize = 4;
 
 /// Coordinate given to the padding after the last point: far from everything, yet small enough
 /// that its square stays finite, so padded lanes compute finite garbage that masks discard.
@@ -24,7 +24,7 @@ const FAR: f32 = 1.0e18;
 /// arrays (so a run of neighbours loads as lane vectors), each padded with [`LANES`] far points
 /// so lane loads never read past the end.
 #[derive(Debug, Clone, Default)]
-pub struct SortedPoints {
+pub(crate) struct SortedPoints {
     /// The cell list; its sorted order is the order of `x` and `y`.
     pub grid: NeighborGrid,
     /// x coordinates, sorted, m (plus padding).
@@ -99,7 +99,7 @@ impl SortedPoints {
 /// What neighbours contribute to forces besides their positions, in sorted order, as separate
 /// arrays padded like [`SortedPoints`] so they load as lane vectors.
 #[derive(Debug, Clone, Default)]
-pub struct NeighborData {
+pub(crate) struct NeighborData {
     /// Velocity x, m/s (zero for walls).
     pub vx: Vec<f32>,
     /// Velocity y, m/s (zero for walls).
@@ -153,7 +153,7 @@ impl NeighborData {
 /// density pass, running in parallel over particles in any order, can store each particle's
 /// values at its slot while nothing else writes there.
 #[derive(Debug, Clone, Default)]
-pub struct PressureSlots(SlotVectors);
+pub(crate) struct PressureSlots(SlotVectors);
 
 impl PressureSlots {
     /// Stores density (kg/m³) and pressure (Pa) at `slot`; a non-positive density counts as no
@@ -185,7 +185,7 @@ fn pack(low: f32, high: f32) -> u64 {
 /// stores each particle's value at its own slot while nothing else writes there. Relaxed atomic
 /// loads and stores compile to plain moves.
 #[derive(Debug, Default)]
-pub struct SlotVectors(Vec<AtomicU64>);
+pub(crate) struct SlotVectors(Vec<AtomicU64>);
 
 impl Clone for SlotVectors {
     fn clone(&self) -> Self {
@@ -227,7 +227,7 @@ impl SlotVectors {
 /// A cell-sorted copy of the fluid particles for neighbour reads: positions and velocities
 /// from the start of the sub-step, then densities and pressures once they are known.
 #[derive(Debug, Clone, Default)]
-pub struct FluidSnapshot {
+pub(crate) struct FluidSnapshot {
     /// Positions and cell list (for scanning candidates).
     pub points: SortedPoints,
     /// `[x, y, vx, vy]` per sorted slot (m, m/s), padded with [`LANES`] far entries: a
@@ -345,7 +345,7 @@ impl FluidSnapshot {
 /// Fixed boundary particles of the tank and obstacles, cell-sorted, with the pressure the fluid
 /// currently exerts on each.
 #[derive(Debug, Clone, Default)]
-pub struct Walls {
+pub(crate) struct Walls {
     /// Positions and cell list (rebuilt only when the geometry changes).
     pub points: SortedPoints,
     /// Densities and pressure terms (velocities stay zero), sorted.
@@ -358,7 +358,7 @@ pub struct Walls {
 
 /// Density (kg/m³) and pressure (Pa) of one wall particle.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct WallState {
+pub(crate) struct WallState {
     /// Density, kg/m³.
     pub density: f32,
     /// Pressure, Pa.
@@ -403,23 +403,18 @@ impl Walls {
     pub fn len(&self) -> usize {
         self.points.len()
     }
-
-    /// Whether there are no wall particles.
-    pub fn is_empty(&self) -> bool {
-        self.points.is_empty()
-    }
 }
 
 /// Most fluid neighbours a [`NeighborList`] holds; a particle with more (a support ratio above
 /// about 3.5, or a strongly compressed fluid) is evaluated straight from the grid instead.
-pub const NEIGHBOR_LIST_CAPACITY: usize = 48;
+pub(crate) const NEIGHBOR_LIST_CAPACITY: usize = 48;
 
 /// The sorted slots of a particle's fluid neighbours (inside the support, itself excluded), as
 /// found by [`density_and_neighbors_at`](super::solver::density_and_neighbors_at) and reused by
 /// [`acceleration_at`](super::wcsph::acceleration_at), so the force pass
 /// neither searches the grid for fluid neighbours nor evaluates candidates outside the support.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct NeighborList {
+pub(crate) struct NeighborList {
     pub(crate) len: u32,
     // Room for a whole lane batch past the capacity: compaction writes four slots at a time.
     pub(crate) slots: [u32; NEIGHBOR_LIST_CAPACITY + LANES],
@@ -437,11 +432,6 @@ impl NeighborList {
         len: u32::MAX,
         slots: [0; NEIGHBOR_LIST_CAPACITY + LANES],
     };
-
-    /// The neighbours' sorted slots, or `None` if there were too many to list.
-    pub fn slots(&self) -> Option<&[u32]> {
-        self.slots.get(..self.len as usize)
-    }
 
     /// The slots padded to whole lane batches with the snapshot's padding slot (a far point).
     pub(crate) fn padded_slots(&self) -> Option<&[u32]> {

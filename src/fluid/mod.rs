@@ -1,25 +1,26 @@
 //! The SPH fluid plugin. See [`SphPlugin`].
 
-pub mod boundary;
-pub mod clock;
-pub mod components;
-pub mod dfsph;
-pub mod grid;
+mod boundary;
+mod clock;
+mod components;
+mod dfsph;
+mod grid;
 pub mod kernels;
-pub mod layout;
+mod layout;
+#[doc(hidden)]
 pub mod parallel;
-pub mod params;
-pub mod region;
-pub mod save;
-pub mod scenario;
-pub mod sensors;
-pub mod slices;
-pub mod solver;
-pub mod sources;
-pub mod spawn;
-pub mod systems;
+mod params;
+mod region;
+mod save;
+mod scenario;
+mod sensors;
+mod slices;
+mod solver;
+mod sources;
+mod spawn;
+mod systems;
 pub mod validation;
-pub mod wcsph;
+mod wcsph;
 
 use bevy::ecs::intern::Interned;
 use bevy::ecs::schedule::{ScheduleLabel, SingleThreadedExecutor};
@@ -31,9 +32,9 @@ use crate::schedule::{ParticleSchedulePlugin, ParticleSystems};
 pub use crate::schedule::{SphSubstep, SphSubstepSystems};
 pub use boundary::{Obstacle, Tank};
 pub use clock::SubstepClock;
-pub use components::{
-    Acceleration, Density, FluidParticle, NeighborSlot, Position, Pressure, Stiffness, Velocity,
-};
+pub use components::{Acceleration, Density, FluidParticle, Position, Pressure, Velocity};
+pub(crate) use components::{NeighborSlot, Stiffness};
+pub use grid::NeighborGrid;
 pub use kernels::KernelKind;
 pub use params::{DfsphSettings, PressureSolver, SphParams, SphParamsError};
 pub use region::FluidRegion;
@@ -41,8 +42,10 @@ pub use save::{
     LoadSlot, SaveSlot, SnapshotError, SnapshotSlot, load_fluid, load_fluid_from, save_fluid,
     save_fluid_to,
 };
-pub use scenario::{ScenarioKind, SphScenario};
+pub use scenario::{SCENARIO_TANK, ScenarioKind, SphScenario};
 pub use sensors::{FluidEntered, FluidLeft, FluidSample, FluidSensor, SensorReading, probe};
+pub use slices::SliceFluid;
+pub use solver::SphConstants;
 pub use sources::{EmitterRate, FluidDrain, FluidEmitter};
 pub use spawn::FluidBlock;
 pub use systems::{SphParamsStatus, SphSolver, SphStats, refresh_fluid_state};

@@ -3,31 +3,24 @@
 //! See [`SphPlugin`](crate::fluid::SphPlugin).
 
 /// Runs independent pieces of work, possibly in parallel.
-pub trait Parallel: Sync {
+pub(crate) trait Parallel: Sync {
     /// Calls `work` once for every item, in any order, possibly on several threads.
     fn for_each<T: Send, F: Fn(&mut T) + Sync>(&self, items: &mut [T], work: F);
-
-    /// How many threads `for_each` may use.
-    fn threads(&self) -> usize;
 }
 
 /// Runs everything on the calling thread.
 #[derive(Debug, Clone, Copy, Default)]
-pub struct Sequential;
+pub(crate) struct Sequential;
 
 impl Parallel for Sequential {
     fn for_each<T: Send, F: Fn(&mut T) + Sync>(&self, items: &mut [T], work: F) {
         items.iter_mut().for_each(work);
     }
-
-    fn threads(&self) -> usize {
-        1
-    }
 }
 
 /// [`Parallel`] on rayon's current thread pool.
 #[derive(Debug, Clone, Copy, Default)]
-pub struct Rayon;
+pub(crate) struct Rayon;
 
 impl Parallel for Rayon {
     fn for_each<T: Send, F: Fn(&mut T) + Sync>(&self, items: &mut [T], work: F) {
@@ -38,17 +31,13 @@ impl Parallel for Rayon {
         }
         items.par_iter_mut().for_each(&work);
     }
-
-    fn threads(&self) -> usize {
-        rayon::current_num_threads()
-    }
 }
 
 /// Slots per parallel task of the slot passes, fixed (not from the thread count) so that sums
 /// over slots add up in the same order on any number of threads. Measured with the `bench`
 /// example, the demo's DFSPH dam break at 2,500 particles on two threads: 1.37x real time with
 /// 256, 1.22x with 512.
-pub const CHUNK: usize = 256;
+pub(crate) const CHUNK: usize = 256;
 
 /// Fewest particles whose slot passes run in parallel. Worth it only on a pool whose threads
 /// stay awake between passes (the ECS runs its passes in rayon regions for that): at 2,500
@@ -94,6 +83,6 @@ pub(crate) fn for_each_slot<T: Send>(
 }
 
 /// A chunk length that splits `len` items into about `pieces` chunks of at least `min` items.
-pub fn chunk_size(len: usize, pieces: usize, min: usize) -> usize {
+pub(crate) fn chunk_size(len: usize, pieces: usize, min: usize) -> usize {
     len.div_ceil(pieces.max(1)).max(min).max(1)
 }

@@ -150,9 +150,6 @@ impl Default for SphParams {
 /// Why a [`SphParams`] value was refused (the crate's one [`ParamsError`](crate::params::ParamsError)).
 pub type SphParamsError = crate::params::ParamsError;
 
-/// One numeric field of [`SphParams`]: see [`ParamField`].
-pub type SphParamField = ParamField<SphParams>;
-
 impl ParamTable for SphParams {
     const OWNER: &'static str = "SphParams";
 

@@ -77,16 +77,6 @@ impl SliceFluid {
         &self.constants
     }
 
-    /// The cell-sorted snapshot of the last sub-step.
-    pub fn snapshot(&self) -> &FluidSnapshot {
-        &self.snapshot
-    }
-
-    /// The wall particles.
-    pub fn walls(&self) -> &Walls {
-        &self.walls
-    }
-
     /// Number of particles.
     pub fn len(&self) -> usize {
         self.position.len()

@@ -121,13 +121,8 @@ impl SphSolver {
         &self.constants
     }
 
-    /// Wall particles of the tank and obstacles, with their current pressures.
-    pub fn walls(&self) -> &Walls {
-        &self.walls
-    }
-
     /// The cell-sorted snapshot of the last sub-step.
-    pub fn snapshot(&self) -> &FluidSnapshot {
+    pub(crate) fn snapshot(&self) -> &FluidSnapshot {
         &self.snapshot
     }
 
@@ -640,13 +635,6 @@ impl Parallel for Passes {
         match self {
             Self::Region => Rayon.for_each(items, work),
             Self::Here => Sequential.for_each(items, work),
-        }
-    }
-
-    fn threads(&self) -> usize {
-        match self {
-            Self::Region => Rayon.threads(),
-            Self::Here => 1,
         }
     }
 }

@@ -97,11 +97,6 @@ impl Quadrupoles {
         }
     }
 
-    /// Sources held.
-    pub fn len(&self) -> usize {
-        self.x.len()
-    }
-
     /// Whether there is no source.
     pub fn is_empty(&self) -> bool {
         self.x.is_empty()

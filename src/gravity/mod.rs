@@ -1,10 +1,10 @@
 //! The Barnes-Hut gravity plugin. See [`GravityPlugin`].
 
-pub mod kernel;
-pub mod params;
-pub mod quadtree;
-pub mod scenario;
-pub mod systems;
+mod kernel;
+mod params;
+mod quadtree;
+mod scenario;
+mod systems;
 
 use crate::body::{Position, Velocity};
 use crate::control::simulation_running;
@@ -17,7 +17,7 @@ use bevy::prelude::*;
 
 pub use kernel::simd_path;
 pub use params::{GravityParams, GravityParamsError};
-pub use quadtree::{Field, FieldQuery, Multipole, QuadTree, direct_field_at};
+pub use quadtree::{Field, FieldQuery, Multipole, Node, QuadTree, direct_field_at};
 pub use scenario::{GalaxyDisc, GravityScenario};
 pub use systems::{GravitySolver, GravityStats};
 
@@ -46,7 +46,7 @@ pub struct Mass(pub f32);
 /// Where the body was gathered in the last field evaluation (the solver's bookkeeping).
 #[derive(Component, Reflect, Debug, Clone, Copy, Default, PartialEq, Eq)]
 #[reflect(Component, Default, Debug, PartialEq)]
-pub struct GravitySlot(pub u32);
+pub(crate) struct GravitySlot(pub u32);
 
 /// Gravitational acceleration of the body at the last tree evaluation, m/s².
 #[derive(Component, Reflect, Debug, Clone, Copy, Default, Deref, DerefMut, PartialEq)]

@@ -314,11 +314,6 @@ impl QuadTree {
         &self.order
     }
 
-    /// Position of the `k`-th body in the tree's order, m.
-    pub fn sorted_position(&self, k: usize) -> Vec2 {
-        Vec2::new(self.x[k], self.y[k])
-    }
-
     /// Acceleration and potential at `p` from every body in the tree (bodies exactly at `p`
     /// are left out).
     pub fn field_at(&self, p: Vec2, gravity: &FieldQuery) -> Field {

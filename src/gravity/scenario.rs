@@ -50,7 +50,7 @@ impl Default for GalaxyDisc {
 
 /// Generated bodies, in spawn order (the central one first).
 #[derive(Debug, Clone, Default, PartialEq)]
-pub struct Bodies {
+pub(crate) struct Bodies {
     /// Positions, m.
     pub positions: Vec<Vec2>,
     /// Velocities, m/s.
@@ -70,7 +70,7 @@ impl GalaxyDisc {
 
     /// The bodies: positions uniform in area between the inner radius and the radius,
     /// anticlockwise circular speeds `√(G M(<r) / r)`.
-    pub fn generate(&self) -> Bodies {
+    pub(crate) fn generate(&self) -> Bodies {
         let mut rng = ChaCha8Rng::seed_from_u64(self.seed);
         let n = self.bodies.max(1);
         let disc = n - 1;

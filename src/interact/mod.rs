@@ -2,7 +2,7 @@
 //! under the cursor; pause, step, reset and tilt the tank from the keyboard. See
 //! [`ParticleInteractPlugin`].
 
-pub mod tools;
+mod tools;
 
 use crate::body::{Position, Velocity};
 use crate::control::{ResetSimulation, SimulationControl, simulation_running};
@@ -16,7 +16,7 @@ use bevy::input::mouse::AccumulatedMouseScroll;
 use bevy::prelude::*;
 use bevy::window::PrimaryWindow;
 
-pub use tools::{PointerAction, PointerForce, falloff, nozzle_row, tilted_gravity};
+pub(crate) use tools::{PointerAction, PointerForce, nozzle_row, tilted_gravity};
 
 /// Mouse and keyboard tools for the fluid.
 ///

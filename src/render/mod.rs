@@ -2,10 +2,10 @@
 //! or pressure, moved smoothly between fixed steps; a camera that keeps the tank in view. See
 //! [`ParticleRenderPlugin`].
 
-pub mod bodies;
-pub mod colormap;
-pub mod liquid;
-pub mod view;
+mod bodies;
+mod colormap;
+mod liquid;
+mod view;
 
 use crate::body::{Position, Velocity};
 use crate::fluid::{Density, FluidParticle, Obstacle, Pressure, SphParams};
@@ -15,9 +15,11 @@ use bevy::prelude::*;
 use bevy::render::render_resource::{Extent3d, TextureDimension, TextureFormat};
 
 pub use bodies::{BodyColor, BodyView};
-pub use colormap::{ColorMap, ColorRange, ColorTable};
+pub(crate) use colormap::ColorTable;
+pub use colormap::{ColorMap, ColorRange};
 pub use liquid::LiquidStyle;
-pub use view::{ParticleCamera, ViewInsets, cursor_to_world, fit_tank};
+pub(crate) use view::cursor_to_world;
+pub use view::{ParticleCamera, ViewInsets};
 
 /// Draws fluid particles as sprites and keeps a [`ParticleCamera`] framing the tank.
 ///
