@@ -3,7 +3,8 @@
 //! Bevy plugins for real-time 2D particle physics: an incompressible SPH fluid in SI units
 //! (divergence-free SPH by default, weakly compressible SPH on request), stepped in
 //! `FixedUpdate` over a cell-sorted snapshot with an O(n) cell-list neighbour search, its passes
-//! over neighbours in parallel on one pool ([`compute`]).
+//! over neighbours in parallel on one pool (as many threads as Bevy's `ComputeTaskPool`); and
+//! Barnes-Hut gravity for anything with a mass.
 //!
 //! ```no_run
 //! use bevy::prelude::*;
@@ -25,7 +26,8 @@
 //!   [`Mass`](gravity::Mass), fluid particles included; [`GravityParams`](gravity::GravityParams)
 //!   tunes it.
 //! - [`ParticlePlugins`]: the simulation plugins, as a group (headless-safe), in one schedule
-//!   under crate-wide sets ([`schedule`]).
+//!   under crate-wide sets ([`ParticleSystems`], [`SphSubstepSystems`]) that every plugin
+//!   nests under.
 //! - Emitters, drains, sensors and the point probe ([`fluid::FluidEmitter`],
 //!   [`fluid::FluidDrain`], [`fluid::FluidSensor`], [`fluid::probe`]), save and restore
 //!   ([`fluid::save_fluid`], [`fluid::load_fluid`]).
@@ -33,13 +35,17 @@
 //!   tinted through a colour map (`render::ParticleRenderPlugin`), mouse and keyboard tools
 //!   (`interact::ParticleInteractPlugin`) and the egui tweak panel (`panel::ParticlePanelPlugin`);
 //!   `demo::SphDemoPlugin` is the `dam_break` example's whole app.
-//! - [`control`]: pause, single-step and reset for every simulation plugin.
+//! - [`SimulationControl`] and [`ResetSimulation`]: pause, single-step and reset for every
+//!   simulation plugin.
+//! - [`ParamsError`], [`ParamsStatus`] and [`ParamTable`]: the one parameters pattern of
+//!   [`SphParams`](fluid::SphParams) and [`GravityParams`](gravity::GravityParams).
 //!
 //! With `--no-default-features` only the simulation is compiled: no window, renderer or egui.
 //!
-//! The pure algorithms ([`fluid::kernels`], [`fluid::grid`], [`fluid::solver`],
-//! [`fluid::boundary`]) have no ECS in them and can be used on their own;
-//! [`fluid::slices::SliceFluid`] runs the whole solver on plain vectors.
+//! The pure algorithms have no ECS in them and can be used on their own: the smoothing kernels
+//! ([`fluid::kernels`]), the cell-list neighbour search ([`fluid::NeighborGrid`]), the whole
+//! fluid solver on plain vectors ([`fluid::SliceFluid`]) and the quadtree
+//! ([`gravity::QuadTree`]).
 
 #![warn(missing_docs)]
 
@@ -111,7 +117,7 @@ pub fn task_pool_plugin(compute_threads: usize) -> TaskPoolPlugin {
 
 /// The simulation plugins of the crate, all stepping in one schedule ([`FixedUpdate`] by
 /// default, or the one given to [`new`](Self::new)) under the crate-wide
-/// [`ParticleSystems`](schedule::ParticleSystems): they run headless (with `MinimalPlugins`) as
+/// [`ParticleSystems`]: they run headless (with `MinimalPlugins`) as
 /// well as in a game. Configure one with
 /// `.set(SphPlugin::new(schedule).with_fixed_hz(120.0))` (a plugin set this way takes the
 /// schedule given to it, so pass the same one) or leave one out with

@@ -83,7 +83,7 @@ pub use systems::{SphParamsStatus, SphSolver, SphStats, refresh_fluid_state};
 ///    measure (and send [`FluidEntered`] and [`FluidLeft`]), then fill [`SphStats`].
 ///
 /// The grid rebuild and the passes over neighbours run by sorted slot in parallel regions on the
-/// crate's pool ([`compute::region`](crate::compute::region): as many threads as Bevy's
+/// crate's pool (as many threads as Bevy's
 /// `ComputeTaskPool`, whose own threads would sleep between passes); the light passes over
 /// components (`par_iter_mut` from 8,192 particles) use the `ComputeTaskPool`. On machines with
 /// few cores

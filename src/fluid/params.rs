@@ -79,7 +79,7 @@ pub enum PressureSolver {
     Wcsph,
     /// Divergence-free SPH (Bender & Koschier 2015, 2017): an implicit incompressible solver
     /// whose time step follows the flow's CFL (`C Δx / v_max`, milliseconds), not the speed of
-    /// sound. The default. See [`DfsphSettings`] and [`dfsph`](crate::fluid::dfsph).
+    /// sound. The default. See [`DfsphSettings`].
     #[default]
     Dfsph,
 }
@@ -102,8 +102,8 @@ impl PressureSolver {
 /// Each sub-step makes the velocity field divergence-free (a pressure solve to
 /// `divergence_tolerance`), adds gravity, viscosity and external forces, then solves for the
 /// pressure that brings the predicted density back to rest (to `density_tolerance`), and moves
-/// the particles. Both solves start from the last sub-step's pressures (`warm_start`). See
-/// [`dfsph`](crate::fluid::dfsph) for the method and what it does not do yet.
+/// the particles. Both solves start from the last sub-step's pressures (`warm_start`). The
+/// README's "The incompressible solver" section lists where it differs from the paper.
 #[derive(Reflect, Debug, Clone, Copy, PartialEq)]
 #[reflect(Default, Debug, PartialEq)]
 pub struct DfsphSettings {

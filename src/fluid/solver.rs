@@ -65,7 +65,7 @@ pub struct SphConstants {
     pub dfsph: DfsphSettings,
     /// Volume of a particle, `m/ρ₀`, m² (per metre of depth).
     pub volume: f32,
-    /// Factor on the kernel gradient in [`dfsph`](super::dfsph) that makes the discrete gradient
+    /// Factor on the kernel gradient in the DFSPH solver that makes the discrete gradient
     /// of a linear field exact on the rest lattice (about 1.05 at 2.5 spacings), so hydrostatic
     /// pressure comes out at `ρ₀g` per metre instead of a few percent high.
     pub gradient_scale: f32,

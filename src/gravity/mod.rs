@@ -71,7 +71,7 @@ pub struct GravityPotential(pub f32);
 /// 2. [`GravitySystems::Drift`]: leapfrog half kick and drift of bodies that are not fluid
 ///    particles (`par_iter_mut`).
 /// 3. [`GravitySystems::Field`]: build the quadtree (parallel sort and top levels on the crate's
-///    compute pool, [`compute::region`](crate::compute::region)),
+///    compute pool),
 ///    evaluate the field at every body with a group walk ([`QuadTree::fields`], in parallel on
 ///    rayon, in the tree's cache-friendly order) and store each body's acceleration and
 ///    potential (`par_iter_mut`).

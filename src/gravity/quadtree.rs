@@ -136,7 +136,7 @@ impl QuadTree {
     /// `leaf_capacity` bodies (more only where bodies share a position). Bodies with a
     /// non-finite position or a non-finite or non-positive mass are left out. Sorting and the
     /// top of the tree run in parallel on the current rayon pool for large inputs (the plugin
-    /// calls it in a [`compute::region`](crate::compute::region)).
+    /// calls it on the crate's compute pool).
     pub fn build(&mut self, positions: &[Vec2], masses: &[f32], leaf_capacity: usize) {
         let leaf_capacity = leaf_capacity.max(1);
         let valid = |i: usize| {
@@ -213,12 +213,11 @@ impl QuadTree {
         self.order
             .par_extend(self.keys.par_iter().map(|&k| (k & index_mask) as u32));
         let order = &self.order;
-        self.x.clear();
-        self.x
-            .par_extend(order.par_iter().map(|&i| positions[i as usize].x));
-        self.y.clear();
-        self.y
-            .par_extend(order.par_iter().map(|&i| positions[i as usize].y));
+        // One read of each body's position for both coordinates.
+        order
+            .par_iter()
+            .map(|&i| (positions[i as usize].x, positions[i as usize].y))
+            .unzip_into_vecs(&mut self.x, &mut self.y);
         self.mass.clear();
         self.mass
             .par_extend(order.par_iter().map(|&i| masses[i as usize]));
@@ -379,11 +378,11 @@ impl QuadTree {
 impl QuadTree {
     /// The field at every body given to [`build`](Self::build), in the order given there (zero
     /// for bodies the build left out): a group walk. Bodies are taken in groups of at most
-    /// [`GROUP_SIZE`] neighbours along the curve; each group walks the tree once, opening a
+    /// 64 neighbours along the curve; each group walks the tree once, opening a
     /// node unless `width < θ · d` for the distance `d` from the node's centre of mass to the
     /// group's bounding box (so the test holds for every body in the group, and the result is
     /// at least as accurate as [`field_at`](Self::field_at) per body), and then every body of
-    /// the group sums the shared list of point masses ([`sum_point_masses`]). Groups run in
+    /// the group sums the shared list of sources on SIMD lanes. Groups run in
     /// parallel on rayon; each body's sum runs in a fixed order, so the result does not depend
     /// on the thread count.
     pub fn fields(&mut self, gravity: &FieldQuery, out: &mut Vec<Field>) {
