@@ -10,11 +10,13 @@
 //! Needs an X display: CI runs it under `xvfb-run` (Mesa's lavapipe renders on the CPU). Without
 //! `DISPLAY` it prints why and passes. The screenshot is kept in the target's temp folder.
 
+use bevy::ecs::schedule::{LogLevel, ScheduleLabel};
 use bevy::prelude::*;
 use bevy::render::view::screenshot::{Screenshot, ScreenshotCaptured, save_to_disk};
 use bevy::window::PrimaryWindow;
 use bevy::winit::WinitPlugin;
 use bevy_sph2d::demo::SphDemoPlugin;
+use bevy_sph2d::SphSubstep;
 use bevy_sph2d::fluid::SphParams;
 use bevy_sph2d::fluid::{FluidParticle, Position, ScenarioKind, SphScenario, SphStats};
 use bevy_sph2d::interact::PointerSettings;
@@ -121,6 +123,15 @@ fn main() {
         ..default()
     })
     .add_systems(Update, script);
+    // The whole demo (fluid, gravity, render, mouse tools, panel) with no ambiguous order in the
+    // particle schedules: a build error panics the first tick.
+    for label in [FixedUpdate.intern(), SphSubstep.intern()] {
+        app.edit_schedule(label, |schedule| {
+            let mut settings = schedule.get_build_settings();
+            settings.ambiguity_detection = LogLevel::Error;
+            schedule.set_build_settings(settings);
+        });
+    }
     let exit = app.run();
     let verdict = VERDICT.lock().map(|mut v| v.take()).unwrap_or(None);
     match verdict {
