@@ -471,9 +471,13 @@ impl QuadTree {
             let node = &self.nodes[i];
             if node.leaf {
                 let bodies = node.first as usize..(node.first + node.count) as usize;
-                x.extend_from_slice(&self.x[bodies.clone()]);
-                y.extend_from_slice(&self.y[bodies.clone()]);
-                m.extend_from_slice(&self.mass[bodies]);
+                // A loop, not `extend_from_slice`: a leaf holds a handful of bodies, and three
+                // `memmove` calls per leaf cost more than the copies (7% of a step at 1M).
+                for k in bodies {
+                    x.push(self.x[k]);
+                    y.push(self.y[k]);
+                    m.push(self.mass[k]);
+                }
                 i = node.next as usize;
                 continue;
             }
