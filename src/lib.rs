@@ -118,9 +118,9 @@ pub fn task_pool_plugin(compute_threads: usize) -> TaskPoolPlugin {
 /// The simulation plugins of the crate, all stepping in one schedule ([`FixedUpdate`] by
 /// default, or the one given to [`new`](Self::new)) under the crate-wide
 /// [`ParticleSystems`]: they run headless (with `MinimalPlugins`) as
-/// well as in a game. Configure one with
-/// `.set(SphPlugin::new(schedule).with_fixed_hz(120.0))` (a plugin set this way takes the
-/// schedule given to it, so pass the same one) or leave one out with
+/// well as in a game. Configure one with `.set(SphPlugin::default().with_fixed_hz(120.0))` (it
+/// still steps in the group's schedule: the first
+/// [`ParticleSchedulePlugin`] added owns the schedule for every plugin) or leave one out with
 /// `.disable::<SphPlugin>()`. For sprites, mouse tools and the panel add `ParticleUiPlugins`
 /// after this group: they step in its schedule too.
 ///

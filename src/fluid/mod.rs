@@ -90,7 +90,8 @@ pub use systems::{SphParamsStatus, SphSolver, SphStats, refresh_fluid_state};
 /// Bevy's default pool sizes leave one compute thread; set `TaskPoolPlugin`'s options to use
 /// them all.
 pub struct SphPlugin {
-    /// The schedule the fluid steps in.
+    /// The schedule the fluid steps in when it is the first of the crate's plugins added (it
+    /// then adds [`ParticleSchedulePlugin`] with it); otherwise the schedule already owned.
     pub schedule: Interned<dyn ScheduleLabel>,
     /// Parameters inserted at start-up.
     pub params: SphParams,
@@ -109,7 +110,8 @@ impl Default for SphPlugin {
 }
 
 impl SphPlugin {
-    /// Steps the fluid in `schedule` instead of [`FixedUpdate`].
+    /// Steps the fluid in `schedule` instead of [`FixedUpdate`] (when added on its own; see
+    /// [`schedule`](Self::schedule)).
     pub fn new(schedule: impl ScheduleLabel) -> Self {
         Self {
             schedule: schedule.intern(),

@@ -84,7 +84,8 @@ pub struct GravityPotential(pub f32);
 /// acceleration of the tick is added to the SPH forces in every sub-step
 /// ([`SphSubstepSystems::FieldForces`]).
 pub struct GravityPlugin {
-    /// The schedule gravity steps in.
+    /// The schedule gravity steps in when it is the first of the crate's plugins added (it then
+    /// adds [`ParticleSchedulePlugin`] with it); otherwise the schedule already owned.
     pub schedule: Interned<dyn ScheduleLabel>,
     /// Parameters inserted at start-up.
     pub params: GravityParams,
@@ -100,7 +101,8 @@ impl Default for GravityPlugin {
 }
 
 impl GravityPlugin {
-    /// Steps gravity in `schedule` instead of [`FixedUpdate`].
+    /// Steps gravity in `schedule` instead of [`FixedUpdate`] (when added on its own; see
+    /// [`schedule`](Self::schedule)).
     pub fn new(schedule: impl ScheduleLabel) -> Self {
         Self {
             schedule: schedule.intern(),
