@@ -650,48 +650,38 @@ impl Builder<'_> {
         let parent = nodes.len();
         nodes.push(Node::default());
         let mut roots = [usize::MAX; 4];
+        let child = |q: usize, out: &mut Vec<Node>| {
+            let (lo, hi) = (bounds[q], bounds[q + 1]);
+            self.subtree(lo, hi, level + 1, child_min(q), half, out);
+        };
+        let occupied = |q: usize| bounds[q] < bounds[q + 1];
         if count >= 4 * PARALLEL_BODIES {
             let children: Vec<Vec<Node>> = (0..4)
                 .into_par_iter()
                 .map(|q| {
-                    let mut child = Vec::new();
-                    if bounds[q] < bounds[q + 1] {
-                        self.subtree(
-                            bounds[q],
-                            bounds[q + 1],
-                            level + 1,
-                            child_min(q),
-                            half,
-                            &mut child,
-                        );
+                    let mut nodes = Vec::new();
+                    if occupied(q) {
+                        child(q, &mut nodes);
                     }
-                    child
+                    nodes
                 })
                 .collect();
-            for (q, child) in children.into_iter().enumerate() {
-                if child.is_empty() {
-                    continue;
-                }
+            for (q, built) in children
+                .into_iter()
+                .enumerate()
+                .filter(|(q, _)| occupied(*q))
+            {
                 let offset = nodes.len() as u32;
                 roots[q] = nodes.len();
-                nodes.extend(child.into_iter().map(|mut node| {
+                nodes.extend(built.into_iter().map(|mut node| {
                     node.next += offset;
                     node
                 }));
             }
         } else {
-            for q in 0..4 {
-                if bounds[q] < bounds[q + 1] {
-                    roots[q] = nodes.len();
-                    self.subtree(
-                        bounds[q],
-                        bounds[q + 1],
-                        level + 1,
-                        child_min(q),
-                        half,
-                        nodes,
-                    );
-                }
+            for q in (0..4).filter(|&q| occupied(q)) {
+                roots[q] = nodes.len();
+                child(q, nodes);
             }
         }
         let (mut mass, mut moment) = (0.0f64, [0.0f64; 2]);
