@@ -1,8 +1,8 @@
 //! # bevy_sph2d
 //!
 //! Bevy plugins for real-time 2D particle physics: an incompressible SPH fluid in SI units
-//! (divergence-free SPH by default, weakly compressible SPH on request), stepped in
-//! `FixedUpdate` over a cell-sorted snapshot with an O(n) cell-list neighbour search, its passes
+//! (divergence-free SPH by default, weakly compressible SPH on request), stepped in a fixed-step
+//! schedule (`FixedUpdate` unless you choose another) over a cell-sorted snapshot with an O(n) cell-list neighbour search, its passes
 //! over neighbours in parallel on one pool (as many threads as Bevy's `ComputeTaskPool`); and
 //! Barnes-Hut gravity for anything with a mass.
 //!
@@ -81,7 +81,7 @@ use bevy::app::{
     TaskPoolThreadAssignmentPolicy,
 };
 use bevy::ecs::intern::Interned;
-use bevy::ecs::schedule::ScheduleLabel;
+use bevy::ecs::schedule::{LogLevel, ScheduleLabel};
 use bevy::prelude::default;
 
 /// A [`TaskPoolPlugin`] whose compute pool, which runs `par_iter_mut`, has exactly
@@ -129,6 +129,9 @@ pub fn task_pool_plugin(compute_threads: usize) -> TaskPoolPlugin {
 pub struct ParticlePlugins {
     /// The schedule every plugin of the crate steps in.
     pub schedule: Interned<dyn ScheduleLabel>,
+    /// How the scheduler reports ambiguous system orders in it
+    /// ([`ParticleSchedulePlugin::ambiguity_detection`]).
+    pub ambiguity_detection: LogLevel,
 }
 
 impl Default for ParticlePlugins {
@@ -138,11 +141,20 @@ impl Default for ParticlePlugins {
 }
 
 impl ParticlePlugins {
-    /// The crate's plugins, stepping in `schedule`.
+    /// The crate's plugins, stepping in `schedule`. The renderer moves sprites between steps by
+    /// `Time<Fixed>::overstep_fraction`, so in a schedule that is not fixed-step its motion is
+    /// only as smooth as the steps.
     pub fn new(schedule: impl ScheduleLabel) -> Self {
         Self {
             schedule: schedule.intern(),
+            ambiguity_detection: LogLevel::Warn,
         }
+    }
+
+    /// Reports ambiguous system orders at `level` (`Error` fails the first tick).
+    pub fn with_ambiguity_detection(mut self, level: LogLevel) -> Self {
+        self.ambiguity_detection = level;
+        self
     }
 }
 
@@ -151,7 +163,7 @@ impl PluginGroup for ParticlePlugins {
         PluginGroupBuilder::start::<Self>()
             .add(schedule::ParticleSchedulePlugin {
                 schedule: self.schedule,
-                ..default()
+                ambiguity_detection: self.ambiguity_detection,
             })
             .add(fluid::SphPlugin {
                 schedule: self.schedule,
@@ -199,12 +211,13 @@ pub mod prelude {
     };
     pub use crate::gravity::{
         GalaxyDisc, GravityAcceleration, GravityParams, GravityPlugin, GravityStats,
-        GravitySystems, Mass,
+        GravitySystems, Mass, Multipole,
     };
     #[cfg(feature = "render")]
     pub use crate::interact::{ParticleInteractPlugin, PointerSettings, PointerTool};
     #[cfg(feature = "egui")]
     pub use crate::panel::ParticlePanelPlugin;
+    pub use crate::params::ParamTable;
     #[cfg(feature = "render")]
     pub use crate::render::{
         ColorMap, LiquidStyle, ParticleCamera, ParticleDraw, ParticleRenderPlugin, ParticleView,

@@ -3,7 +3,7 @@
 //!
 //! A plugin orders its own sets against these, never against another plugin's: the fluid nests
 //! under [`ParticleSystems::Fluid`], gravity under [`ParticleSystems::Bodies`], the mouse tools
-//! under [`ParticleSystems::Input`] and [`BodyForceSystems`], and so on. The fluid's sub-steps
+//! under [`ParticleSystems::Input`] and [`BodyForceSystems::Pointer`], and so on. The fluid's sub-steps
 //! run in their own schedule, [`SphSubstep`], whose stages ([`SphSubstepSystems`]) are
 //! crate-wide in the same way.
 
@@ -30,11 +30,16 @@ pub enum ParticleSystems {
     Finish,
 }
 
-/// Forces on gravity bodies this tick, inside [`ParticleSystems::Bodies`]: after the tree's
-/// field is stored and before the closing half kick, so add to
+/// Forces on gravity bodies this tick, inside [`ParticleSystems::Bodies`], chained in this
+/// order after the tree's field is stored and before the closing half kick: add to
 /// [`GravityAcceleration`](crate::gravity::GravityAcceleration) with `+=`.
 #[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub struct BodyForceSystems;
+pub enum BodyForceSystems {
+    /// The mouse tools' push and pull.
+    Pointer,
+    /// A game's own forces on bodies.
+    External,
+}
 
 /// The schedule of one fluid sub-step, run as many times per tick as stability needs (inside
 /// [`ParticleSystems::Fluid`]).
@@ -53,8 +58,10 @@ pub enum SphSubstepSystems {
     /// Accelerations from fields that other plugins compute once a tick (Barnes-Hut gravity on
     /// fluid particles with a [`Mass`](crate::gravity::Mass)), added with `+=`.
     FieldForces,
-    /// A game's own forces (and the mouse tools'), added to
-    /// [`Acceleration`](crate::fluid::Acceleration) before integration.
+    /// The mouse tools' push, pull and drag.
+    PointerForces,
+    /// Empty, for a game's own forces: add to [`Acceleration`](crate::fluid::Acceleration)
+    /// with `+=` before integration.
     ExternalForces,
     /// Time step, integration, collisions.
     Integrate,
@@ -87,7 +94,9 @@ pub struct ParticleSchedulePlugin {
     /// The schedule every plugin of the crate steps in.
     pub schedule: Interned<dyn ScheduleLabel>,
     /// How ambiguous system orders are reported: `Warn` by default, since a game's own
-    /// unordered systems in the same schedule are reported too; tests use `Error`.
+    /// unordered systems in the same schedule are reported too; tests use `Error`. It only
+    /// raises the schedule's level: a stricter one set first is kept, and `Ignore` changes
+    /// nothing.
     pub ambiguity_detection: LogLevel,
 }
 
@@ -124,10 +133,24 @@ impl ParticleSchedulePlugin {
 
 impl Plugin for ParticleSchedulePlugin {
     fn build(&self, app: &mut App) {
-        if !app.is_plugin_added::<SimulationControlPlugin>() {
-            app.add_plugins(SimulationControlPlugin {
-                schedule: self.schedule,
-            });
+        let control: Vec<_> = app
+            .get_added_plugins::<SimulationControlPlugin>()
+            .iter()
+            .map(|control| control.schedule)
+            .collect();
+        match control.first() {
+            None => {
+                app.add_plugins(SimulationControlPlugin {
+                    schedule: self.schedule,
+                });
+            }
+            Some(&other) if other != self.schedule => warn!(
+                "SimulationControlPlugin decides each tick in {other:?}, but the particle \
+                 schedule is {:?}: the simulations will not step; add it with the same schedule \
+                 or leave it to ParticleSchedulePlugin",
+                self.schedule
+            ),
+            Some(_) => {}
         }
         app.insert_resource(ParticleSchedule(self.schedule))
             .configure_sets(
@@ -144,7 +167,9 @@ impl Plugin for ParticleSchedulePlugin {
             )
             .configure_sets(
                 self.schedule,
-                BodyForceSystems.in_set(ParticleSystems::Bodies),
+                (BodyForceSystems::Pointer, BodyForceSystems::External)
+                    .chain()
+                    .in_set(ParticleSystems::Bodies),
             );
         app.init_schedule(SphSubstep);
         let level = self.ambiguity_detection;

@@ -357,3 +357,43 @@ fn the_plugins_group_walk_is_at_least_as_accurate_as_before_the_simd_kernel() {
         );
     }
 }
+
+/// Spawns a 1 kg probe 1 m right of the origin, once, from a system in `ParticleSystems::Input`
+/// (where the mouse tools spawn bodies).
+fn spawn_probe(mut commands: Commands, mut done: Local<bool>) {
+    if !*done {
+        commands.spawn((Mass(1.0), Position(Vec2::X), Velocity(Vec2::ZERO)));
+        *done = true;
+    }
+}
+
+#[test]
+fn a_body_spawned_mid_tick_gets_its_field_before_its_first_kick() {
+    // A heavy body at the origin (G = 1, M = 1000), and a probe spawned from a game system in
+    // the input stage: over its first tick it must get both half kicks, v = dt · GM/r².
+    let params = GravityParams {
+        gravitational_constant: 1.0,
+        softening: 0.0,
+        ..default()
+    };
+    let tick = 0.001;
+    let mut app = gravity_app(params, tick);
+    app.world_mut()
+        .spawn((Mass(1000.0), Position(Vec2::ZERO), Velocity(Vec2::ZERO)));
+    app.update();
+    app.add_systems(
+        FixedUpdate,
+        spawn_probe.in_set(bevy_sph2d::ParticleSystems::Input),
+    );
+    app.update();
+    let probe = bodies(&mut app)
+        .into_iter()
+        .find(|b| b.2 == 1.0)
+        .expect("the probe was spawned");
+    let expected = -(tick as f32) * 1000.0;
+    assert!(
+        (probe.1.x - expected).abs() < 0.01 * expected.abs(),
+        "probe velocity {} after one tick, expected {expected}",
+        probe.1
+    );
+}

@@ -235,6 +235,14 @@ fn a_stricter_ambiguity_level_set_first_is_kept() {
     assert_eq!(level, LogLevel::Error);
 }
 
+/// A game's force on gravity bodies.
+#[cfg(feature = "render")]
+fn body_wind(mut bodies: Query<&mut bevy_sph2d::gravity::GravityAcceleration>) {
+    for mut a in &mut bodies {
+        a.0.x += 0.1;
+    }
+}
+
 #[cfg(feature = "render")]
 #[test]
 fn the_mouse_tools_have_no_ambiguous_order_with_fluid_and_gravity() {
@@ -243,7 +251,14 @@ fn the_mouse_tools_have_no_ambiguous_order_with_fluid_and_gravity() {
         MinimalPlugins,
         ParticlePlugins::default(),
         ParticleInteractPlugin,
-    ));
+    ))
+    // A game's own forces in the documented stages, next to the tools' and gravity's.
+    .add_systems(
+        SphSubstep,
+        antigravity.in_set(SphSubstepSystems::ExternalForces),
+    )
+    .add_systems(FixedUpdate, body_wind.in_set(BodyForceSystems::External));
+    app.finish();
     let strict = ScheduleBuildSettings {
         ambiguity_detection: LogLevel::Error,
         ..default()

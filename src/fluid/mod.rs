@@ -34,6 +34,7 @@ pub use boundary::{Obstacle, Tank};
 pub use clock::SubstepClock;
 pub use components::{Acceleration, Density, FluidParticle, Position, Pressure, Velocity};
 pub(crate) use components::{NeighborSlot, Stiffness};
+pub use dfsph::DfsphReport;
 pub use grid::NeighborGrid;
 pub use kernels::KernelKind;
 pub use params::{DfsphSettings, PressureSolver, SphParams, SphParamsError};
@@ -48,7 +49,7 @@ pub use slices::SliceFluid;
 pub use solver::SphConstants;
 pub use sources::{EmitterRate, FluidDrain, FluidEmitter};
 pub use spawn::FluidBlock;
-pub use systems::{SphParamsStatus, SphSolver, SphStats, refresh_fluid_state};
+pub use systems::{SolverIterations, SphParamsStatus, SphSolver, SphStats, refresh_fluid_state};
 
 /// SPH fluid, simulated in a fixed-step schedule ([`FixedUpdate`] by default) with a stable
 /// number of sub-steps per tick, incompressible through the divergence-free solver (DFSPH, the
@@ -73,10 +74,12 @@ pub use systems::{SphParamsStatus, SphSolver, SphStats, refresh_fluid_state};
 ///    3. [`SphSubstepSystems::Forces`]: into [`Acceleration`] (this overwrites the previous
 ///       sub-step's value), with [`Density`] and [`Pressure`]: WCSPH: pressure, viscosity and
 ///       gravity. DFSPH: viscosity and gravity, the pressure following in `Integrate`.
-///    4. [`SphSubstepSystems::ExternalForces`]: empty, for your own forces: add to
+///    4. [`SphSubstepSystems::FieldForces`] and [`SphSubstepSystems::PointerForces`]: gravity
+///       on fluid particles with a mass, and the mouse tools (when those plugins run).
+///    5. [`SphSubstepSystems::ExternalForces`]: empty, for your own forces: add to
 ///       [`Acceleration`] with `+=`, e.g.
 ///       `app.add_systems(SphSubstep, wind.in_set(SphSubstepSystems::ExternalForces))`.
-///    5. [`SphSubstepSystems::Integrate`]: choose the step; DFSPH solves for the pressure that
+///    6. [`SphSubstepSystems::Integrate`]: choose the step; DFSPH solves for the pressure that
 ///       keeps the density at rest under all the accelerations above; advance, keep particles
 ///       in the tank and out of obstacles.
 /// 3. [`SphSystems::Finish`]: [`FluidEmitter`]s pour, [`FluidDrain`]s remove, [`FluidSensor`]s
@@ -185,6 +188,7 @@ impl Plugin for SphPlugin {
                     SphSubstepSystems::Density,
                     SphSubstepSystems::Forces,
                     SphSubstepSystems::FieldForces,
+                    SphSubstepSystems::PointerForces,
                     SphSubstepSystems::ExternalForces,
                     SphSubstepSystems::Integrate,
                 )

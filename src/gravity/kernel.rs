@@ -4,7 +4,7 @@
 //! baseline), picked at run time.
 //!
 //! Every path computes the same thing in the same order, so the results are identical bit for
-//! bit on every CPU with fused multiply-add (x86 with AVX-512 or AVX2 and FMA, any 64-bit ARM):
+//! bit on every FMA path (x86 with AVX-512F and FMA, or AVX2 and FMA; any 64-bit ARM):
 //! - the masses are summed on [`LANES`] partial sums (mass `i` goes to lane `i % LANES`), which
 //!   are added in one fixed tree at the end; the compiler never reorders a float sum, so each
 //!   path vectorises the same lanes;
@@ -13,8 +13,8 @@
 //!   between vendors;
 //! - the same products are fused (`mul_add`, one rounding) on every FMA path.
 //!
-//! x86 CPUs without FMA (before 2013, and some low-end Atoms, Celerons and Pentiums) take the
-//! baseline path, which rounds those products twice instead of calling a slow software
+//! Other x86 CPUs (without AVX2 or FMA: before 2013, some AMD CPUs up to 2015, and some
+//! low-end Atoms, Celerons and Pentiums) take the baseline path, which rounds those products twice instead of calling a slow software
 //! `fmaf`: its results differ from the FMA paths' in the last bits, so a run there is
 //! reproducible on that kind of CPU (for any thread count), not bit for bit against an FMA
 //! CPU.
@@ -66,8 +66,9 @@ pub fn sum_point_masses(p: Vec2, x: &[f32], y: &[f32], m: &[f32], eps_sq: f32) -
 }
 
 /// Tree nodes as sources with their quadrupole moments, structure of arrays: centre of mass
-/// (`x`, `y`), mass `m`, and the moment `Q = Σ mᵢ (3 sᵢsᵢᵀ − |sᵢ|² I)` of the bodies at `sᵢ`
-/// from the centre (`xx`, `yy`, `xy`).
+/// (`x`, `y`), mass `m`, and the moment per unit mass `Q/m` (`xx`, `yy`, `xy`), where
+/// `Q = Σ mᵢ (3 sᵢsᵢᵀ − |sᵢ|² I)` for the bodies at `sᵢ` from the centre. Per unit mass it
+/// scales as the node's width squared, so it stays in range at any mass.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Quadrupoles {
     /// Centre of mass, x, m.
@@ -76,11 +77,11 @@ pub struct Quadrupoles {
     pub y: Vec<f32>,
     /// Mass, kg.
     pub m: Vec<f32>,
-    /// `Qxx`, kg·m².
+    /// `Qxx/m`, m².
     pub xx: Vec<f32>,
-    /// `Qyy`, kg·m².
+    /// `Qyy/m`, m².
     pub yy: Vec<f32>,
-    /// `Qxy`, kg·m².
+    /// `Qxy/m`, m².
     pub xy: Vec<f32>,
 }
 
@@ -92,7 +93,8 @@ impl Quadrupoles {
         }
     }
 
-    /// Adds a node at centre `c` of mass `m` and moment `q = [Qxx, Qyy, Qxy]`.
+    /// Adds a node at centre `c` of mass `m` and moment per unit mass
+    /// `q = [Qxx, Qyy, Qxy] / m`.
     pub fn push(&mut self, c: Vec2, m: f32, q: [f32; 3]) {
         for (v, value) in self
             .columns()
@@ -129,10 +131,12 @@ impl Quadrupoles {
 }
 
 /// Acceleration (per unit `G`) and potential at `p` from `nodes`, each a point mass plus its
-/// quadrupole term, softened as [`sum_point_masses`]:
-/// `a = m d/r³ − Q d/r⁵ + (5/2)(dᵀQd) d/r⁷` and `φ = −m/r − (dᵀQd)/(2r⁵)` for `d` from `p` to
-/// the centre and `r² = |d|² + ε²`. Sources of zero mass (padding) or exactly at `p` are left
-/// out.
+/// quadrupole term: `a = m d/r³ − Q d/r⁵ + (5/2)(dᵀQd) d/r⁷` and `φ = −m/r − (dᵀQd)/(2r⁵)` for
+/// `d` from `p` to the centre, softened by putting `r² = |d|² + ε²` (not the exact expansion of
+/// a Plummer potential, which adds an `ε² tr Q` term: the two agree while `ε` is small next to
+/// the distance, as it is for a node far enough to be accepted). Computed as
+/// `a = (m/r²) (n (1 + 5/2 nᵀQ'n) − Q'n)` with `n = d/r` and `Q' = Q/(m r²)`, which has the
+/// point mass's range. Sources of zero mass (padding) or exactly at `p` are left out.
 pub fn sum_quadrupoles(p: Vec2, nodes: &Quadrupoles, eps_sq: f32) -> (Vec2, f32) {
     match simd() {
         #[cfg(target_arch = "x86_64")]
@@ -144,6 +148,46 @@ pub fn sum_quadrupoles(p: Vec2, nodes: &Quadrupoles, eps_sq: f32) -> (Vec2, f32)
         Simd::Fused => sum_nodes::<true>(p, nodes, eps_sq),
         Simd::Baseline => sum_nodes::<false>(p, nodes, eps_sq),
     }
+}
+
+/// The acceleration and potential per unit `G` at `p` from one node at `c` of mass `m` and
+/// moment per unit mass `q`, as one source of [`sum_quadrupoles`] (for single-point queries).
+pub fn quadrupole_at(p: Vec2, c: Vec2, m: f32, q: [f32; 3], eps_sq: f32) -> (Vec2, f32) {
+    let d = c - p;
+    let (ax, ay, phi) = if simd() == Simd::Baseline {
+        quadrupole::<false>(d.x, d.y, m, q, eps_sq)
+    } else {
+        quadrupole::<true>(d.x, d.y, m, q, eps_sq)
+    };
+    (Vec2::new(ax, ay), -phi)
+}
+
+/// One quadrupole source at `(dx, dy)` from the point: its acceleration per unit `G` and the
+/// potential's magnitude (see [`sum_quadrupoles`] for the formula).
+#[inline(always)]
+fn quadrupole<const F: bool>(dx: f32, dy: f32, m: f32, q: [f32; 3], eps: f32) -> (f32, f32, f32) {
+    let r2 = mul_add::<F>(dx, dx, dy * dy);
+    let s = r2 + eps;
+    // Padding (zero mass), the point itself and overflowing distances are left out.
+    let inv = if r2 > 0.0 && m > 0.0 && s < f32::INFINITY {
+        rsqrt::<F>(s)
+    } else {
+        0.0
+    };
+    let inv2 = inv * inv;
+    let (nx, ny) = (dx * inv, dy * inv);
+    // Q'n and nᵀQ'n, dimensionless (about (w/r)² for a node of width w).
+    let qx = mul_add::<F>(q[0], nx, q[2] * ny) * inv2;
+    let qy = mul_add::<F>(q[2], nx, q[1] * ny) * inv2;
+    let nqn = mul_add::<F>(nx, qx, ny * qy);
+    let m_inv = m * inv;
+    let m_inv2 = m_inv * inv;
+    let radial = mul_add::<F>(2.5, nqn, 1.0);
+    (
+        m_inv2 * mul_add::<F>(nx, radial, -qx),
+        m_inv2 * mul_add::<F>(ny, radial, -qy),
+        m_inv * mul_add::<F>(0.5, nqn, 1.0),
+    )
 }
 
 /// The code path the sums take on this CPU.
@@ -245,7 +289,13 @@ impl Lanes {
             let dx = x[j] - p.x;
             let dy = y[j] - p.y;
             let r2 = mul_add::<F>(dx, dx, dy * dy);
-            let inv_r = if r2 > 0.0 { rsqrt::<F>(r2 + eps) } else { 0.0 };
+            let s = r2 + eps;
+            // Beyond 10¹⁹ m the square overflows: such a mass counts as infinitely far.
+            let inv_r = if r2 > 0.0 && s < f32::INFINITY {
+                rsqrt::<F>(s)
+            } else {
+                0.0
+            };
             // Mass first: a zero mass (padding) contributes exactly zero at any distance.
             let m_inv_r = m[j] * inv_r;
             let k = m_inv_r * inv_r * inv_r;
@@ -260,25 +310,11 @@ impl Lanes {
     fn add_quadrupoles<const F: bool>(&mut self, p: Vec2, q: [&Chunk; 6], eps: f32) {
         let [x, y, m, xx, yy, xy] = q;
         for j in 0..LANES {
-            let dx = x[j] - p.x;
-            let dy = y[j] - p.y;
-            let r2 = mul_add::<F>(dx, dx, dy * dy);
-            // Padding has zero mass and moment: left out before r⁻⁷ could overflow.
-            let inv = if r2 > 0.0 && m[j] > 0.0 {
-                rsqrt::<F>(r2 + eps)
-            } else {
-                0.0
-            };
-            let inv2 = inv * inv;
-            let m_inv = m[j] * inv;
-            let inv5 = inv * inv2 * inv2;
-            let qx = mul_add::<F>(xx[j], dx, xy[j] * dy);
-            let qy = mul_add::<F>(xy[j], dx, yy[j] * dy);
-            let dqd = mul_add::<F>(dx, qx, dy * qy);
-            let radial = mul_add::<F>(m_inv, inv2, 2.5 * dqd * inv5 * inv2);
-            self.ax[j] = mul_add::<F>(dx, radial, mul_add::<F>(-qx, inv5, self.ax[j]));
-            self.ay[j] = mul_add::<F>(dy, radial, mul_add::<F>(-qy, inv5, self.ay[j]));
-            self.phi[j] -= mul_add::<F>(0.5 * dqd, inv5, m_inv);
+            let moment = [xx[j], yy[j], xy[j]];
+            let (ax, ay, phi) = quadrupole::<F>(x[j] - p.x, y[j] - p.y, m[j], moment, eps);
+            self.ax[j] += ax;
+            self.ay[j] += ay;
+            self.phi[j] -= phi;
         }
     }
 
@@ -399,10 +435,13 @@ mod tests {
                 }
                 #[cfg(target_arch = "x86_64")]
                 {
-                    if std::arch::is_x86_feature_detected!("avx2") {
+                    use std::arch::is_x86_feature_detected as has;
+                    if has!("fma") && has!("avx2") {
+                        // SAFETY: the CPU has AVX2 and FMA, checked just above.
                         assert_eq!(unsafe { masses_avx2(p, &x, &y, &m, eps_sq) }, reference);
                     }
-                    if std::arch::is_x86_feature_detected!("avx512f") {
+                    if has!("fma") && has!("avx512f") {
+                        // SAFETY: the CPU has AVX-512F and FMA, checked just above.
                         assert_eq!(unsafe { masses_avx512(p, &x, &y, &m, eps_sq) }, reference);
                     }
                 }
@@ -472,7 +511,7 @@ mod tests {
         let y: Vec<f32> = bodies.iter().map(|b| c.y + b.1).collect();
         let m: Vec<f32> = bodies.iter().map(|b| b.2).collect();
         let mut source = Quadrupoles::default();
-        source.push(c + com, m_total, q);
+        source.push(c + com, m_total, q.map(|v| v / m_total));
         source.pad();
         for p in [
             Vec2::new(5.0, 1.0),
@@ -496,10 +535,13 @@ mod tests {
         #[cfg(target_arch = "x86_64")]
         {
             let reference = sum_nodes::<true>(p, &source, 1e-3);
-            if std::arch::is_x86_feature_detected!("avx2") {
+            use std::arch::is_x86_feature_detected as has;
+            if has!("fma") && has!("avx2") {
+                // SAFETY: the CPU has AVX2 and FMA, checked just above.
                 assert_eq!(unsafe { quadrupoles_avx2(p, &source, 1e-3) }, reference);
             }
-            if std::arch::is_x86_feature_detected!("avx512f") {
+            if has!("fma") && has!("avx512f") {
+                // SAFETY: the CPU has AVX-512F and FMA, checked just above.
                 assert_eq!(unsafe { quadrupoles_avx512(p, &source, 1e-3) }, reference);
             }
         }
@@ -508,5 +550,30 @@ mod tests {
         let (a, phi) = sum_quadrupoles(p, &plain, 0.0);
         let (b, psi) = sum_point_masses(p, &[c.x], &[c.y], &[2.0], 0.0);
         assert!((a - b).length() <= 1e-6 * b.length() && (phi - psi).abs() <= 1e-6 * psi.abs());
+    }
+
+    #[test]
+    fn far_masses_and_heavy_nodes_stay_finite() {
+        let p = Vec2::ZERO;
+        // A mass beyond 10¹⁹ m (its square overflows) counts as infinitely far, next to padding.
+        let (a, phi) = sum_point_masses(p, &[1.0e20, 0.0], &[0.0, 0.0], &[1.0, 0.0], 0.0);
+        assert_eq!((a, phi), (Vec2::ZERO, 0.0));
+        let mut far = Quadrupoles::default();
+        far.push(Vec2::new(1.0e20, 0.0), 1.0, [0.1, -0.1, 0.0]);
+        far.pad();
+        assert_eq!(sum_quadrupoles(p, &far, 0.0), (Vec2::ZERO, 0.0));
+        // A solar mass a million kilometres wide, 1 AU away: Q itself (2·10⁴⁸ kg·m²) would
+        // overflow an f32; per unit mass it does not.
+        let (m, w, r) = (2.0e30f32, 1.0e9f32, 1.5e11f32);
+        let mut sun = Quadrupoles::default();
+        sun.push(Vec2::new(r, 0.0), m, [w * w, -w * w, 0.0]);
+        sun.pad();
+        let (a, phi) = sum_quadrupoles(p, &sun, 0.0);
+        let point = m / (r * r);
+        assert!(a.is_finite() && phi.is_finite());
+        assert!(
+            (a.x / point - 1.0).abs() < 1e-3 && a.x > 0.0,
+            "{a} vs {point}"
+        );
     }
 }

@@ -16,7 +16,7 @@ use bevy::ecs::schedule::ScheduleLabel;
 use bevy::prelude::*;
 
 pub use kernel::simd_path;
-pub use params::{GravityParams, GravityParamsError};
+pub use params::{GravityParams, GravityParamsError, GravityParamsStatus};
 pub use quadtree::{Field, FieldQuery, Multipole, Node, QuadTree, direct_field_at};
 pub use scenario::{GalaxyDisc, GravityScenario};
 pub use systems::{GravitySolver, GravityStats};
@@ -120,9 +120,9 @@ impl GravityPlugin {
 /// The gravity stages, chained in this order.
 #[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum GravitySystems {
-    /// Parameter validation; the field of new bodies.
+    /// Resets and parameter validation.
     Prepare,
-    /// Half kick and drift.
+    /// The field of bodies new this tick, then half kick and drift.
     Drift,
     /// Tree build and field evaluation.
     Field,
@@ -155,7 +155,8 @@ impl Plugin for GravityPlugin {
                     (
                         GravitySystems::Drift,
                         GravitySystems::Field,
-                        BodyForceSystems,
+                        BodyForceSystems::Pointer,
+                        BodyForceSystems::External,
                         GravitySystems::Kick,
                     )
                         .chain()
@@ -168,12 +169,16 @@ impl Plugin for GravityPlugin {
                     (
                         scenario::reset_bodies,
                         crate::params::apply_params::<GravityParams>,
-                        systems::compute_gravity_field.run_if(systems::bodies_added),
                     )
                         .chain()
                         .in_set(GravitySystems::Prepare),
-                    systems::kick_and_drift
-                        .run_if(simulation_running)
+                    // Bodies spawned this tick, by a reset or in `ParticleSystems::Input`, get
+                    // their field before the first half kick.
+                    (
+                        systems::compute_gravity_field.run_if(systems::bodies_added),
+                        systems::kick_and_drift.run_if(simulation_running),
+                    )
+                        .chain()
                         .in_set(GravitySystems::Drift),
                     systems::compute_gravity_field
                         .run_if(simulation_running)

@@ -6,9 +6,8 @@ use crate::params::{ParamField, ParamTable, param_field};
 use bevy::prelude::*;
 
 /// Barnes-Hut gravity parameters. Edit them at any time; every change is validated and a bad one
-/// is refused (the plugin keeps the last valid values and says why in [`GravityStats`]).
-///
-/// [`GravityStats`]: crate::gravity::GravityStats
+/// is refused (the plugin keeps the last valid values and says why in
+/// [`GravityParamsStatus`](crate::gravity::GravityParamsStatus)).
 #[derive(Resource, Reflect, Debug, Clone, PartialEq)]
 #[reflect(Resource, Default, Debug, PartialEq)]
 pub struct GravityParams {
@@ -44,6 +43,10 @@ impl Default for GravityParams {
 /// Why a [`GravityParams`] value was refused (the crate's one
 /// [`ParamsError`](crate::params::ParamsError)).
 pub type GravityParamsError = crate::params::ParamsError;
+
+/// Whether the last change to [`GravityParams`] was taken (the crate's one
+/// [`ParamsStatus`](crate::params::ParamsStatus)).
+pub type GravityParamsStatus = crate::params::ParamsStatus<GravityParams>;
 
 impl ParamTable for GravityParams {
     const OWNER: &'static str = "GravityParams";

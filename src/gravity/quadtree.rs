@@ -3,7 +3,7 @@
 //! centre of mass per node, and the opening test "node width / distance < θ". See
 //! [`GravityPlugin`](crate::gravity::GravityPlugin).
 
-use super::kernel::{LANES, Quadrupoles, sum_point_masses, sum_quadrupoles};
+use super::kernel::{LANES, Quadrupoles, quadrupole_at, sum_point_masses, sum_quadrupoles};
 use bevy::math::Vec2;
 use bevy::reflect::{Reflect, std_traits::ReflectDefault};
 use rayon::prelude::*;
@@ -18,8 +18,8 @@ const BITS: u32 = 24;
 const PARALLEL_BODIES: usize = 16_384;
 
 /// Most bodies in a group that shares one interaction list in [`QuadTree::fields`]: larger
-/// groups walk the tree less often but sum longer lists (16: 0.80x the speed of 64 at 1M
-/// bodies, 32: 0.98x, 128: 0.92x).
+/// groups walk the tree less often but sum longer lists (at 1M bodies 16 ran at 0.8 times the
+/// speed of 64; 32, 96 and 128 within a few percent of it).
 pub const GROUP_SIZE: u32 = 64;
 
 /// One node of the tree. Children follow their parent directly (depth-first order); `next` is
@@ -98,7 +98,7 @@ pub struct QuadTree {
     nodes: Vec<Node>,
     /// The expansion [`build`](Self::build) prepares and the queries use.
     multipole: Multipole,
-    /// `[Qxx, Qyy, Qxy]` of each node about its centre of mass, kg·m² (only with
+    /// `[Qxx, Qyy, Qxy] / m` of each node about its centre of mass, m² (only with
     /// [`Multipole::Quadrupole`]).
     quadrupoles: Vec<[f32; 3]>,
     /// Sorted bodies: x, y, mass (structure of arrays for the leaf loops).
@@ -127,7 +127,7 @@ impl QuadTree {
         self.multipole = multipole;
     }
 
-    /// The expansion in use.
+    /// The expansion the next [`build`](Self::build) prepares.
     pub fn multipole(&self) -> Multipole {
         self.multipole
     }
@@ -180,6 +180,7 @@ impl QuadTree {
             self.y.clear();
             self.mass.clear();
             self.order.clear();
+            self.quadrupoles.clear();
             return;
         }
         // A square a little larger than the bounding box, so every body quantises inside it.
@@ -239,7 +240,8 @@ impl QuadTree {
         }
     }
 
-    /// The quadrupole moment of every node about its centre of mass: leaves from their bodies
+    /// The quadrupole moment per unit mass of every node about its centre of mass (kept per
+    /// unit mass, so it stays in range at any mass): leaves from their bodies
     /// (in parallel), inner nodes from their children by the parallel-axis rule
     /// `Q = Σ (Q_c + m_c (3 δδᵀ − |δ|² I))`, `δ` from the node's centre to the child's (children
     /// come after their parent, so one backward pass sees every child first). In `f64`.
@@ -289,8 +291,12 @@ impl QuadTree {
             }
             q[i] = total;
         }
+        let per_mass = |node: &Node, q: &[f64; 3]| {
+            let m = node.mass as f64;
+            q.map(|v| if m > 0.0 { (v / m) as f32 } else { 0.0 })
+        };
         self.quadrupoles
-            .extend(q.iter().map(|q| q.map(|v| v as f32)));
+            .extend(self.nodes.iter().zip(&q).map(|(node, q)| per_mass(node, q)));
     }
 
     /// The nodes, root first, in depth-first order.
@@ -345,16 +351,8 @@ impl QuadTree {
                 && p.x < node.min.x + node.width
                 && p.y < node.min.y + node.width;
             if !inside && node.width * node.width < theta_sq * r2 {
-                if let Some(&[xx, yy, xy]) = self.quadrupoles.get(i) {
-                    let source = Quadrupoles {
-                        x: vec![node.center_of_mass.x],
-                        y: vec![node.center_of_mass.y],
-                        m: vec![node.mass],
-                        xx: vec![xx],
-                        yy: vec![yy],
-                        xy: vec![xy],
-                    };
-                    let (a, phi) = sum_quadrupoles(p, &source, eps_sq);
+                if let Some(&q) = self.quadrupoles.get(i) {
+                    let (a, phi) = quadrupole_at(p, node.center_of_mass, node.mass, q, eps_sq);
                     acceleration += a;
                     potential += phi;
                 } else {

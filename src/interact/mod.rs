@@ -31,7 +31,8 @@ pub(crate) use tools::{PointerAction, PointerForce, nozzle_row, tilted_gravity};
 ///
 /// The cursor is read each frame before the fixed steps
 /// ([`RunFixedMainLoopSystems::BeforeFixedMainLoop`]) into [`Pointer`]; the fixed step applies
-/// its force in [`SphSubstepSystems::ExternalForces`] and pours or erases in
+/// its force in [`SphSubstepSystems::PointerForces`] (on bodies in
+/// [`BodyForceSystems::Pointer`]) and pours, erases or spawns bodies in
 /// [`ParticleInteractSystems`], in [`ParticleSystems::Input`].
 #[derive(Debug, Clone, Copy, Default)]
 pub struct ParticleInteractPlugin;
@@ -126,7 +127,7 @@ pub struct Pointer {
     /// The cursor's velocity, m/s.
     pub velocity: Vec2,
     /// The force the fixed step applies this frame.
-    pub force: PointerForce,
+    pub(crate) force: PointerForce,
     /// The left button is held with the pour or erase tool.
     pub tool_active: bool,
     /// UI has the pointer (set by the panel): the tools ignore the mouse.
@@ -145,36 +146,41 @@ pub struct ParticleInteractSystems;
 
 impl Plugin for ParticleInteractPlugin {
     fn build(&self, app: &mut App) {
-        let schedule = ParticleSchedule::of(app);
         app.register_type::<PointerSettings>()
             .register_type::<Pointer>()
             .init_resource::<PointerSettings>()
             .init_resource::<Pointer>()
-            .configure_sets(
-                schedule,
-                ParticleInteractSystems.in_set(ParticleSystems::Input),
-            )
             .add_systems(
                 RunFixedMainLoop,
                 track_pointer.in_set(RunFixedMainLoopSystems::BeforeFixedMainLoop),
             )
             .add_systems(
-                schedule,
-                (
-                    (pour_particles, erase_particles, spawn_bodies)
-                        .chain()
-                        .run_if(simulation_running)
-                        .in_set(ParticleInteractSystems),
-                    push_bodies
-                        .run_if(simulation_running)
-                        .in_set(BodyForceSystems),
-                ),
-            )
-            .add_systems(
                 SphSubstep,
-                apply_pointer_force.in_set(SphSubstepSystems::ExternalForces),
+                apply_pointer_force.in_set(SphSubstepSystems::PointerForces),
             )
             .add_systems(Update, (keyboard_controls, draw_pointer));
+    }
+
+    /// The fixed-step systems go into the particle schedule once every plugin is built, so the
+    /// tools follow [`ParticlePlugins`](crate::ParticlePlugins) added before or after them.
+    fn finish(&self, app: &mut App) {
+        let schedule = ParticleSchedule::of(app);
+        app.configure_sets(
+            schedule,
+            ParticleInteractSystems.in_set(ParticleSystems::Input),
+        )
+        .add_systems(
+            schedule,
+            (
+                (pour_particles, erase_particles, spawn_bodies)
+                    .chain()
+                    .run_if(simulation_running)
+                    .in_set(ParticleInteractSystems),
+                push_bodies
+                    .run_if(simulation_running)
+                    .in_set(BodyForceSystems::Pointer),
+            ),
+        );
     }
 }
 

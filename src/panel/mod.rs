@@ -494,7 +494,6 @@ fn fluid_section(ui: &mut egui::Ui, data: &mut PanelData, fluid: bool) {
         });
 }
 
-/// The divergence-free solver's settings.
 /// The slider of one row of `P`'s [`ParamTable::FIELDS`]: the label, unit, range and scale the
 /// row gives.
 fn field_slider<P: ParamTable>(ui: &mut egui::Ui, p: &mut P, field: &str) {
@@ -515,6 +514,7 @@ fn field_slider<P: ParamTable>(ui: &mut egui::Ui, p: &mut P, field: &str) {
     }
 }
 
+/// The divergence-free solver's settings.
 fn dfsph_settings(ui: &mut egui::Ui, p: &mut SphParams) {
     for field in [
         "dfsph.cfl_number",

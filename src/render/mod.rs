@@ -15,8 +15,7 @@ use bevy::prelude::*;
 use bevy::render::render_resource::{Extent3d, TextureDimension, TextureFormat};
 
 pub use bodies::{BodyColor, BodyView};
-pub(crate) use colormap::ColorTable;
-pub use colormap::{ColorMap, ColorRange};
+pub use colormap::{ColorMap, ColorRange, ColorTable};
 pub use liquid::LiquidStyle;
 pub(crate) use view::cursor_to_world;
 pub use view::{ParticleCamera, ViewInsets};
@@ -178,7 +177,6 @@ pub enum ParticleRenderSystems {
 
 impl Plugin for ParticleRenderPlugin {
     fn build(&self, app: &mut App) {
-        let schedule = ParticleSchedule::of(app);
         app.register_type::<ParticleView>()
             .register_type::<BodyView>()
             .init_resource::<BodyView>()
@@ -188,10 +186,6 @@ impl Plugin for ParticleRenderPlugin {
             .init_resource::<ViewInsets>()
             .add_systems(PreStartup, create_particle_texture)
             .add_observer(attach_sprite)
-            .add_systems(
-                schedule,
-                remember_previous_positions.in_set(ParticleSystems::Prepare),
-            )
             .configure_sets(
                 RunFixedMainLoop,
                 (
@@ -217,6 +211,16 @@ impl Plugin for ParticleRenderPlugin {
             )
             .add_systems(Update, draw_outlines);
         liquid::build(app);
+    }
+
+    /// The fixed-step system goes into the particle schedule once every plugin is built, so the
+    /// renderer follows [`ParticlePlugins`](crate::ParticlePlugins) added before or after it.
+    fn finish(&self, app: &mut App) {
+        let schedule = ParticleSchedule::of(app);
+        app.add_systems(
+            schedule,
+            remember_previous_positions.in_set(ParticleSystems::Prepare),
+        );
     }
 }
 
