@@ -77,10 +77,9 @@ pub use schedule::{
 };
 
 use bevy::app::{
-    FixedUpdate, PluginGroup, PluginGroupBuilder, TaskPoolOptions, TaskPoolPlugin,
+    PluginGroup, PluginGroupBuilder, TaskPoolOptions, TaskPoolPlugin,
     TaskPoolThreadAssignmentPolicy,
 };
-use bevy::ecs::intern::Interned;
 use bevy::ecs::schedule::{LogLevel, ScheduleLabel};
 use bevy::prelude::default;
 
@@ -125,19 +124,10 @@ pub fn task_pool_plugin(compute_threads: usize) -> TaskPoolPlugin {
 /// after this group: they step in its schedule too.
 ///
 /// [`FixedUpdate`]: bevy::prelude::FixedUpdate
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Default)]
 pub struct ParticlePlugins {
-    /// The schedule every plugin of the crate steps in.
-    pub schedule: Interned<dyn ScheduleLabel>,
-    /// How the scheduler reports ambiguous system orders in it
-    /// ([`ParticleSchedulePlugin::ambiguity_detection`]).
-    pub ambiguity_detection: LogLevel,
-}
-
-impl Default for ParticlePlugins {
-    fn default() -> Self {
-        Self::new(FixedUpdate)
-    }
+    /// The schedule owner the group adds first: the schedule and its ambiguity detection.
+    pub schedule: ParticleSchedulePlugin,
 }
 
 impl ParticlePlugins {
@@ -146,31 +136,28 @@ impl ParticlePlugins {
     /// only as smooth as the steps.
     pub fn new(schedule: impl ScheduleLabel) -> Self {
         Self {
-            schedule: schedule.intern(),
-            ambiguity_detection: LogLevel::Warn,
+            schedule: ParticleSchedulePlugin::new(schedule),
         }
     }
 
     /// Reports ambiguous system orders at `level` (`Error` fails the first tick).
     pub fn with_ambiguity_detection(mut self, level: LogLevel) -> Self {
-        self.ambiguity_detection = level;
+        self.schedule.ambiguity_detection = level;
         self
     }
 }
 
 impl PluginGroup for ParticlePlugins {
     fn build(self) -> PluginGroupBuilder {
+        let schedule = self.schedule.schedule;
         PluginGroupBuilder::start::<Self>()
-            .add(schedule::ParticleSchedulePlugin {
-                schedule: self.schedule,
-                ambiguity_detection: self.ambiguity_detection,
-            })
+            .add(self.schedule)
             .add(fluid::SphPlugin {
-                schedule: self.schedule,
+                schedule,
                 ..default()
             })
             .add(gravity::GravityPlugin {
-                schedule: self.schedule,
+                schedule,
                 ..default()
             })
     }
