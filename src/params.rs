@@ -143,7 +143,6 @@ impl<P: ParamTable> ParamField<P> {
     pub fn check(&self, params: &P) -> Result<(), ParamsError> {
         let value = (self.get)(params);
         let (min, max) = self.valid;
-        let unit = self.unit;
         let ok = value.is_finite()
             && value <= max
             && if self.positive {
@@ -154,15 +153,45 @@ impl<P: ParamTable> ParamField<P> {
         if ok {
             return Ok(());
         }
+        let unit = spaced(self.unit);
         Err(ParamsError {
             owner: P::OWNER,
             field: self.field,
             message: if self.positive {
-                format!("{value} {unit} must be positive and at most {max} {unit}")
+                format!("{value}{unit} must be positive and at most {max}{unit}")
             } else {
-                format!("{value} {unit} is outside {min}..={max} {unit}")
+                format!("{value}{unit} is outside {min}..={max}{unit}")
             },
         })
+    }
+}
+
+/// Checks `min ≤ value ≤ max` (finite) for a field whose range a table row cannot hold (it
+/// depends on other fields); the error reads as a row's does.
+pub(crate) fn check_range(
+    owner: &'static str,
+    field: &'static str,
+    value: f32,
+    (min, max): (f32, f32),
+    unit: &str,
+) -> Result<(), ParamsError> {
+    if value.is_finite() && value >= min && value <= max {
+        return Ok(());
+    }
+    let unit = spaced(unit);
+    Err(ParamsError {
+        owner,
+        field,
+        message: format!("{value}{unit} is outside {min}..={max}{unit}"),
+    })
+}
+
+/// `" m/s"` after a number, nothing for a pure number.
+fn spaced(unit: &str) -> String {
+    if unit.is_empty() {
+        String::new()
+    } else {
+        format!(" {unit}")
     }
 }
 

@@ -309,23 +309,9 @@ impl SphParams {
     /// Checks every field; the first problem found is returned with the field's name, its value
     /// and the accepted range.
     pub fn validate(&self) -> Result<(), SphParamsError> {
-        fn range(
-            field: &'static str,
-            value: f32,
-            min: f32,
-            max: f32,
-            unit: &str,
-        ) -> Result<(), SphParamsError> {
-            if value.is_finite() && value >= min && value <= max {
-                Ok(())
-            } else {
-                Err(SphParamsError {
-                    owner: "SphParams",
-                    field,
-                    message: format!("{value} {unit} is outside {min}..={max} {unit}"),
-                })
-            }
-        }
+        let range = |field, value, min, max, unit| {
+            crate::params::check_range(Self::OWNER, field, value, (min, max), unit)
+        };
         for field in Self::FIELDS {
             field.check(self)?;
         }
