@@ -68,7 +68,7 @@ pub enum SphSubstepSystems {
 }
 
 /// The schedule the crate's plugins step in, as inserted by [`ParticleSchedulePlugin`]: the
-/// render and interaction plugins read it when they are built.
+/// render and interaction plugins read it in `Plugin::finish`, once every plugin is built.
 #[derive(Resource, Debug, Clone, Copy, PartialEq, Eq)]
 pub struct ParticleSchedule(pub Interned<dyn ScheduleLabel>);
 
