@@ -34,7 +34,7 @@ pub use boundary::{Obstacle, Tank};
 pub use clock::SubstepClock;
 pub use components::{Acceleration, Density, FluidParticle, Position, Pressure, Velocity};
 pub(crate) use components::{NeighborSlot, Stiffness};
-pub use dfsph::DfsphReport;
+pub use dfsph::{DfsphReport, LARGEST_ERROR_RATIO, MAX_RELIEF_RATE, PRESSURE_ACCURACY};
 pub use grid::NeighborGrid;
 pub use kernels::KernelKind;
 pub use params::{DfsphSettings, PressureSolver, SphParams, SphParamsError};

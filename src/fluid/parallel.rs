@@ -68,18 +68,31 @@ pub(crate) fn for_each_slot<T: Send>(
     parallel: &impl Parallel,
     work: impl Fn(usize, &mut T) -> f64 + Sync,
 ) -> f64 {
+    fold_slots(out, parallel, work, |a, b| a + b)
+}
+
+/// Runs `work(slot, &mut out[slot])` for every slot, in parallel chunks of [`CHUNK`] slots, and
+/// folds what it returns with `add` from `R::default()`: slot by slot within a chunk, then chunk
+/// by chunk in slot order, so the result is the same on any number of threads.
+pub(crate) fn fold_slots<T: Send, R: Copy + Default + Send>(
+    out: &mut [T],
+    parallel: &impl Parallel,
+    work: impl Fn(usize, &mut T) -> R + Sync,
+    add: impl Fn(R, R) -> R + Sync,
+) -> R {
     let n = out.len();
     let mut jobs: Vec<_> = out
         .chunks_mut(CHUNK)
         .enumerate()
-        .map(|(k, values)| (k * CHUNK, values, 0.0f64))
+        .map(|(k, values)| (k * CHUNK, values, R::default()))
         .collect();
-    run_jobs(parallel, n, &mut jobs, |(start, values, sum)| {
+    run_jobs(parallel, n, &mut jobs, |(start, values, total)| {
         for (k, value) in values.iter_mut().enumerate() {
-            *sum += work(*start + k, value);
+            *total = add(*total, work(*start + k, value));
         }
     });
-    jobs.iter().map(|job| job.2).sum()
+    jobs.iter()
+        .fold(R::default(), |total, job| add(total, job.2))
 }
 
 /// A chunk length that splits `len` items into about `pieces` chunks of at least `min` items.

@@ -134,7 +134,7 @@ impl Default for DfsphSettings {
             max_time_step: 0.005,
             density_tolerance: 0.0001,
             divergence_tolerance: 0.01,
-            max_density_iterations: 100,
+            max_density_iterations: 300,
             max_divergence_iterations: 100,
             warm_start: true,
         }

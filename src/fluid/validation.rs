@@ -1,7 +1,7 @@
-//! The Martin & Moyce (1952) dam break as a reusable check: the experiment's surge-front data,
-//! the scene in SPH units, and a headless run on [`SliceFluid`] that records the front. The
-//! physics tests assert on it (through the ECS) and the `validate` example charts it. Pure, no
-//! ECS.
+//! Reusable physical checks, headless on [`SliceFluid`]: the Martin & Moyce (1952) dam break
+//! (the experiment's surge-front data, the scene in SPH units, a run that records the front),
+//! and a resting layer of any depth and spacing measured against hydrostatics. The physics tests
+//! assert on them and the `validate` example prints and charts them. Pure, no ECS.
 
 use super::boundary::Tank;
 use super::params::{STANDARD_GRAVITY, SphParams};
@@ -113,6 +113,143 @@ pub fn compare(history: &[(f32, f32)]) -> Vec<(f32, f32, f32, f32)> {
             (t, z, measured, z / measured)
         })
         .collect()
+}
+
+/// A layer of water at rest in a tank, `depth` deep and `width` wide, at `spacing`: what the
+/// pressure solve must hold at every depth.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RestingLayer {
+    /// Water depth `D`, m.
+    pub depth: f32,
+    /// Tank width, m.
+    pub width: f32,
+    /// Particle spacing, m.
+    pub spacing: f32,
+}
+
+/// How a [`RestingLayer`] settled: per-particle pressure and density averaged over the last
+/// part of the run, the speeds at its end.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct LayerReport {
+    /// Particles.
+    pub particles: usize,
+    /// Particles from the floor to the surface.
+    pub particles_deep: u32,
+    /// The least-squares slope of the averaged pressure against height below the surface layer,
+    /// as a multiple of `ρ₀g` (hydrostatic: 1).
+    pub slope: f32,
+    /// The largest `|ρ/ρ₀ − 1|` of the averaged density below the surface layer, fraction.
+    pub compression: f32,
+    /// The fastest particle at the end, as a fraction of the gravity-wave speed `√(gD)`.
+    pub fastest: f32,
+    /// Mean iterations of the density solve per sub-step.
+    pub density_iterations: f32,
+    /// Mean iterations of the divergence solve per sub-step.
+    pub divergence_iterations: f32,
+}
+
+impl RestingLayer {
+    /// A layer `depth` deep (m), `width` wide (m), at `spacing` (m).
+    pub fn new(depth: f32, width: f32, spacing: f32) -> Self {
+        Self {
+            depth,
+            width,
+            spacing,
+        }
+    }
+
+    /// Particles from the floor to the surface.
+    pub fn particles_deep(&self) -> u32 {
+        self.block().lattice_size(self.spacing).1
+    }
+
+    /// `base` with this layer's spacing, a tank 1.6 times as high as the water, and (for WCSPH)
+    /// the speed of sound for the depth.
+    pub fn params(&self, base: SphParams) -> SphParams {
+        SphParams {
+            particle_spacing: self.spacing,
+            speed_of_sound: SphParams::speed_of_sound_for_height(self.depth),
+            tank: Some(Tank::new(self.width, 1.6 * self.depth)),
+            ..base
+        }
+    }
+
+    /// The water.
+    pub fn block(&self) -> FluidBlock {
+        FluidBlock::new(
+            bevy::math::Vec2::ZERO,
+            bevy::math::Vec2::new(self.width, self.depth),
+        )
+        .with_seed(2)
+    }
+
+    /// Runs the layer on `base` for `duration` seconds in ticks of `tick` seconds, averaging
+    /// pressure and density over the last `average` seconds. `None` if `base` does not validate.
+    pub fn run(
+        &self,
+        base: SphParams,
+        duration: f64,
+        average: f64,
+        tick: f64,
+    ) -> Option<LayerReport> {
+        let params = self.params(base);
+        let constants = params.constants().ok()?;
+        let positions = self.block().positions_for(&params);
+        let n = positions.len();
+        let mut fluid = SliceFluid::new(constants, positions, &[]);
+        let (mut pressure, mut density, mut height) =
+            (vec![0.0f64; n], vec![0.0f64; n], vec![0.0f64; n]);
+        let mut samples = 0u32;
+        while fluid.clock.time < duration - 1e-9 {
+            fluid.advance(tick);
+            if fluid.clock.time >= duration - average - 1e-9 {
+                samples += 1;
+                for k in 0..n {
+                    pressure[k] += fluid.pressure[k] as f64;
+                    density[k] += fluid.density[k] as f64;
+                    height[k] += fluid.position[k].y as f64;
+                }
+            }
+        }
+        let samples = samples.max(1) as f64;
+        let surface = fluid.position.iter().map(|p| p.y).fold(0.0, f32::max) as f64;
+        let below = surface - 3.0 * self.spacing as f64;
+        let interior: Vec<usize> = (0..n).filter(|&k| height[k] / samples < below).collect();
+        let fit = |k: usize| (height[k] / samples, pressure[k] / samples);
+        let count = interior.len().max(1) as f64;
+        let (my, mp) = interior.iter().fold((0.0, 0.0), |(a, b), &k| {
+            let (y, p) = fit(k);
+            (a + y / count, b + p / count)
+        });
+        let (mut syy, mut syp) = (0.0, 0.0);
+        for &k in &interior {
+            let (y, p) = fit(k);
+            syy += (y - my) * (y - my);
+            syp += (y - my) * (p - mp);
+        }
+        let rho_g = (params.rest_density * params.gravity.length()) as f64;
+        let slope = if syy > 0.0 { -syp / syy / rho_g } else { 0.0 };
+        let compression = interior
+            .iter()
+            .map(|&k| (density[k] / samples / params.rest_density as f64 - 1.0).abs())
+            .fold(0.0, f64::max);
+        let fastest = fluid
+            .velocity
+            .iter()
+            .map(|v| v.length())
+            .fold(0.0, f32::max);
+        let steps = fluid.clock.total_substeps.max(1) as f32;
+        let density_iterations = fluid.density_iterations as f32 / steps;
+        Some(LayerReport {
+            particles: n,
+            particles_deep: self.particles_deep(),
+            slope: slope as f32,
+            compression: compression as f32,
+            fastest: fastest / (params.gravity.length() * self.depth).sqrt(),
+            density_iterations,
+            divergence_iterations: fluid.iterations as f32 / steps - density_iterations,
+        })
+    }
 }
 
 #[cfg(test)]
