@@ -9,7 +9,7 @@
 //! ```
 
 use bevy_sph2d::fluid::SphParams;
-use bevy_sph2d::fluid::validation::RestingLayer;
+use bevy_sph2d::fluid::validation::{DamBreakSettling, LayerReport, RestingLayer};
 use clap::{Parser, ValueEnum};
 
 /// Runs resting layers and prints how close each comes to hydrostatic.
@@ -19,6 +19,10 @@ struct Args {
     /// A layer as `depth,width,spacing` in metres (repeatable); default: the depth issue's set.
     #[arg(long, value_parser = layer)]
     layer: Vec<RestingLayer>,
+    /// Instead of layers: the demo's dam break with about this many particles, settling
+    /// (use `--duration 6` or more).
+    #[arg(long)]
+    dam_break: Option<u32>,
     /// Pressure solver.
     #[arg(long, value_enum, default_value_t = Solver::Dfsph)]
     solver: Solver,
@@ -92,28 +96,44 @@ fn main() {
         (d.max_density_iterations, d.max_divergence_iterations) = (most, most);
     }
     d.warm_start &= !args.cold_start;
+    let tick = 1.0 / args.hz;
+    if let Some(particles) = args.dam_break {
+        let started = std::time::Instant::now();
+        let scene = DamBreakSettling { particles };
+        let Some(r) = scene.run(base.clone(), args.duration, args.average, tick) else {
+            eprintln!("the parameters do not validate");
+            std::process::exit(2);
+        };
+        print_report("dam-break", &base, &r, started);
+        return;
+    }
     for layer in layers {
         let started = std::time::Instant::now();
-        let Some(r) = layer.run(base.clone(), args.duration, args.average, 1.0 / args.hz) else {
+        let Some(r) = layer.run(base.clone(), args.duration, args.average, tick) else {
             eprintln!("{layer:?}: the parameters do not validate");
             std::process::exit(2);
         };
-        println!(
-            "resting solver={} depth={} width={} spacing={} particles={} deep={} slope={:.3} \
-             compression={:.4} fastest={:.4} density_iterations={:.1} divergence_iterations={:.1} \
-             wall_s={:.1}",
-            base.solver.label(),
-            layer.depth,
-            layer.width,
-            layer.spacing,
-            r.particles,
-            r.particles_deep,
-            r.slope,
-            r.compression,
-            r.fastest,
-            r.density_iterations,
-            r.divergence_iterations,
-            started.elapsed().as_secs_f64()
+        let scene = format!(
+            "layer depth={} width={} spacing={}",
+            layer.depth, layer.width, layer.spacing
         );
+        print_report(&scene, &base, &r, started);
     }
+}
+
+/// One machine-readable line per scene.
+fn print_report(scene: &str, base: &SphParams, r: &LayerReport, started: std::time::Instant) {
+    println!(
+        "resting solver={} {scene} particles={} deep={} slope={:.3} compression={:.4} \
+         fastest={:.4} density_iterations={:.1} divergence_iterations={:.1} wall_s={:.1}",
+        base.solver.label(),
+        r.particles,
+        r.particles_deep,
+        r.slope,
+        r.compression,
+        r.fastest,
+        r.density_iterations,
+        r.divergence_iterations,
+        started.elapsed().as_secs_f64()
+    );
 }

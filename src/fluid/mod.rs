@@ -44,7 +44,9 @@ pub use save::{
     save_fluid_to,
 };
 pub use scenario::{SCENARIO_TANK, ScenarioKind, SphScenario};
-pub use sensors::{FluidEntered, FluidLeft, FluidSample, FluidSensor, SensorReading, probe};
+pub use sensors::{
+    FluidEntered, FluidLeft, FluidSample, FluidSensor, SensorReading, probe, wall_pressure,
+};
 pub use slices::SliceFluid;
 pub use solver::SphConstants;
 pub use sources::{EmitterRate, FluidDrain, FluidEmitter};

@@ -191,6 +191,22 @@ pub struct FluidSample {
 /// [`SphSystems::Simulate`](super::SphSystems::Simulate): `probe(&solver, point)` with
 /// `solver: Res<SphSolver>`.
 pub fn probe(solver: &SphSolver, x: Vec2) -> Option<FluidSample> {
+    sample(solver, x, false)
+}
+
+/// The pressure (Pa) the fluid exerts on a wall at the point `x` (m) of the wall's surface:
+/// the [`probe`]'s sum with each particle's pressure carried to the wall by the hydrostatic
+/// head, `p_w = Σⱼ Wⱼ (pⱼ + ρⱼ g·(x − xⱼ)) / Σⱼ Wⱼ`, as the walls' boundary particles take it
+/// (Adami et al. 2012). The particles next to a wall lie half a spacing to two spacings from
+/// it, so the plain probe there reads the pressure of a point inside the fluid, low by
+/// `ρ₀ g` times that distance. `None` where no particle is within one support of `x`. Read it
+/// as the probe, after [`SphSystems::Simulate`](super::SphSystems::Simulate).
+pub fn wall_pressure(solver: &SphSolver, x: Vec2) -> Option<f32> {
+    sample(solver, x, true).map(|s| s.pressure)
+}
+
+/// The probe's sum at `x`; with `head`, each particle's pressure carried to `x` hydrostatically.
+fn sample(solver: &SphSolver, x: Vec2, head: bool) -> Option<FluidSample> {
     let c = solver.constants();
     let snapshot = solver.snapshot();
     if snapshot.is_empty() || !x.is_finite() {
@@ -198,8 +214,7 @@ pub fn probe(solver: &SphSolver, x: Vec2) -> Option<FluidSample> {
     }
     let dfsph = solver.dfsph();
     let use_dfsph = c.solver == PressureSolver::Dfsph && dfsph.len() == snapshot.len();
-    let at = |slot: usize| -> (f32, f32, Vec2) {
-        let [_, _, vx, vy] = snapshot.kinematics[slot];
+    let at_slot = |slot: usize, vx: f32, vy: f32| -> (f32, f32, Vec2) {
         if use_dfsph {
             (
                 dfsph.density(c, slot),
@@ -210,6 +225,16 @@ pub fn probe(solver: &SphSolver, x: Vec2) -> Option<FluidSample> {
             let (density, term) = snapshot.pressure.get(slot);
             (density, term * density * density, Vec2::new(vx, vy))
         }
+    };
+    let at = |slot: usize| -> (f32, f32, Vec2) {
+        let [px, py, vx, vy] = snapshot.kinematics[slot];
+        let (density, pressure, velocity) = at_slot(slot, vx, vy);
+        let carried = if head {
+            density * c.gravity.dot(x - Vec2::new(px, py))
+        } else {
+            0.0
+        };
+        (density, pressure + carried, velocity)
     };
     let n = snapshot.len();
     let (mut weight, mut density, mut pressure, mut velocity) =

@@ -6,6 +6,7 @@
 use super::boundary::Tank;
 use super::params::{STANDARD_GRAVITY, SphParams};
 use super::slices::SliceFluid;
+use super::solver::max_length;
 use super::spawn::FluidBlock;
 
 /// Martin & Moyce (1952), Phil. Trans. R. Soc. A 244, fig. 3, a column of width `a` and height
@@ -138,7 +139,9 @@ pub struct LayerReport {
     /// The least-squares slope of the averaged pressure against height below the surface layer,
     /// as a multiple of `ρ₀g` (hydrostatic: 1).
     pub slope: f32,
-    /// The largest `|ρ/ρ₀ − 1|` of the averaged density below the surface layer, fraction.
+    /// The largest compression `ρ/ρ₀ − 1` of the averaged density below the surface layer,
+    /// fraction (a free surface reads below rest density by design of summation density, so
+    /// only compression counts, as in the fluid's stats).
     pub compression: f32,
     /// The fastest particle at the end, as a fraction of the gravity-wave speed `√(gD)`.
     pub fastest: f32,
@@ -195,61 +198,110 @@ impl RestingLayer {
         let params = self.params(base);
         let constants = params.constants().ok()?;
         let positions = self.block().positions_for(&params);
-        let n = positions.len();
-        let mut fluid = SliceFluid::new(constants, positions, &[]);
-        let (mut pressure, mut density, mut height) =
-            (vec![0.0f64; n], vec![0.0f64; n], vec![0.0f64; n]);
-        let mut samples = 0u32;
-        while fluid.clock.time < duration - 1e-9 {
-            fluid.advance(tick);
-            if fluid.clock.time >= duration - average - 1e-9 {
-                samples += 1;
-                for k in 0..n {
-                    pressure[k] += fluid.pressure[k] as f64;
-                    density[k] += fluid.density[k] as f64;
-                    height[k] += fluid.position[k].y as f64;
-                }
+        let fluid = SliceFluid::new(constants, positions, &[]);
+        let mut report = settle(fluid, duration, average, tick);
+        report.particles_deep = self.particles_deep();
+        Some(report)
+    }
+}
+
+/// The demo's dam break settling: a column 0.3 of the tank wide and 0.6 high against the left
+/// wall of [`SphParams::water`]'s 2 m × 1.2 m tank, about `particles` particles, run until the
+/// water rests (its settled depth is about 32 spacings at 10,000 particles).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DamBreakSettling {
+    /// About how many particles.
+    pub particles: u32,
+}
+
+impl DamBreakSettling {
+    /// `base` with the spacing that gives about [`particles`](Self::particles) particles.
+    pub fn params(&self, base: SphParams) -> SphParams {
+        let tank = base.tank.unwrap_or(Tank::new(2.0, 1.2));
+        let area = 0.3 * tank.width * 0.6 * tank.height;
+        let spacing = (area / self.particles.max(1) as f32).sqrt();
+        SphParams {
+            particle_spacing: spacing,
+            speed_of_sound: SphParams::speed_of_sound_for_height(0.6 * tank.height),
+            tank: Some(tank),
+            ..base
+        }
+    }
+
+    /// Runs it for `duration` seconds in ticks of `tick`, averaging over the last `average`.
+    /// `None` if `base` does not validate.
+    pub fn run(
+        &self,
+        base: SphParams,
+        duration: f64,
+        average: f64,
+        tick: f64,
+    ) -> Option<LayerReport> {
+        let params = self.params(base);
+        let tank = params.tank?;
+        let constants = params.constants().ok()?;
+        let block = FluidBlock::dam_break(0.3 * tank.width, 0.6 * tank.height).with_seed(7);
+        let fluid = SliceFluid::new(constants, block.positions_for(&params), &[]);
+        Some(settle(fluid, duration, average, tick))
+    }
+}
+
+/// Runs `fluid` in a tank for `duration` seconds in ticks of `tick` seconds and measures how
+/// close it came to hydrostatic rest, with pressure and density averaged per particle over the
+/// last `average` seconds (see [`LayerReport`]; `particles_deep` is the settled depth in
+/// spacings).
+pub fn settle(mut fluid: SliceFluid, duration: f64, average: f64, tick: f64) -> LayerReport {
+    let c = *fluid.constants();
+    let n = fluid.len();
+    let mut sums = vec![[0.0f64; 3]; n];
+    let mut samples = 0u32;
+    while fluid.clock.time < duration - 1e-9 {
+        fluid.advance(tick);
+        if fluid.clock.time >= duration - average - 1e-9 {
+            samples += 1;
+            for (sum, k) in sums.iter_mut().zip(0..n) {
+                sum[0] += fluid.pressure[k] as f64;
+                sum[1] += fluid.density[k] as f64;
+                sum[2] += fluid.position[k].y as f64;
             }
         }
-        let samples = samples.max(1) as f64;
-        let surface = fluid.position.iter().map(|p| p.y).fold(0.0, f32::max) as f64;
-        let below = surface - 3.0 * self.spacing as f64;
-        let interior: Vec<usize> = (0..n).filter(|&k| height[k] / samples < below).collect();
-        let fit = |k: usize| (height[k] / samples, pressure[k] / samples);
-        let count = interior.len().max(1) as f64;
-        let (my, mp) = interior.iter().fold((0.0, 0.0), |(a, b), &k| {
-            let (y, p) = fit(k);
-            (a + y / count, b + p / count)
-        });
-        let (mut syy, mut syp) = (0.0, 0.0);
-        for &k in &interior {
-            let (y, p) = fit(k);
-            syy += (y - my) * (y - my);
-            syp += (y - my) * (p - mp);
-        }
-        let rho_g = (params.rest_density * params.gravity.length()) as f64;
-        let slope = if syy > 0.0 { -syp / syy / rho_g } else { 0.0 };
-        let compression = interior
-            .iter()
-            .map(|&k| (density[k] / samples / params.rest_density as f64 - 1.0).abs())
-            .fold(0.0, f64::max);
-        let fastest = fluid
-            .velocity
-            .iter()
-            .map(|v| v.length())
-            .fold(0.0, f32::max);
-        let steps = fluid.clock.total_substeps.max(1) as f32;
-        let density_iterations = fluid.density_iterations as f32 / steps;
-        Some(LayerReport {
-            particles: n,
-            particles_deep: self.particles_deep(),
-            slope: slope as f32,
-            compression: compression as f32,
-            fastest: fastest / (params.gravity.length() * self.depth).sqrt(),
-            density_iterations,
-            divergence_iterations: fluid.iterations as f32 / steps - density_iterations,
-        })
     }
+    let samples = samples.max(1) as f64;
+    let mean: Vec<[f64; 3]> = sums.iter().map(|s| s.map(|v| v / samples)).collect();
+    let surface = fluid.position.iter().map(|p| p.y).fold(0.0, f32::max) as f64;
+    let below = surface - 3.0 * c.spacing as f64;
+    let interior: Vec<&[f64; 3]> = mean.iter().filter(|m| m[2] < below).collect();
+    let rho_g = (c.rest_density * c.gravity.length()) as f64;
+    let slope = -least_squares_slope(interior.iter().map(|m| (m[2], m[0]))) / rho_g;
+    let compression = interior
+        .iter()
+        .map(|m| m[1] / c.rest_density as f64 - 1.0)
+        .fold(0.0, f64::max);
+    let fastest = max_length(&fluid.velocity);
+    let depth = surface as f32 + 0.5 * c.spacing;
+    let steps = fluid.clock.total_substeps.max(1) as f32;
+    let density_iterations = fluid.density_iterations as f32 / steps;
+    LayerReport {
+        particles: n,
+        particles_deep: (depth / c.spacing).round() as u32,
+        slope: slope as f32,
+        compression: compression as f32,
+        fastest: fastest / (c.gravity.length() * depth).sqrt(),
+        density_iterations,
+        divergence_iterations: fluid.iterations as f32 / steps - density_iterations,
+    }
+}
+
+/// The least-squares slope `dp/dy` of the points `(y, p)` (zero for fewer than two heights).
+fn least_squares_slope(points: impl Iterator<Item = (f64, f64)> + Clone) -> f64 {
+    let count = points.clone().count().max(1) as f64;
+    let (my, mp) = points
+        .clone()
+        .fold((0.0, 0.0), |(a, b), (y, p)| (a + y / count, b + p / count));
+    let (syy, syp) = points.fold((0.0, 0.0), |(a, b), (y, p)| {
+        (a + (y - my) * (y - my), b + (y - my) * (p - mp))
+    });
+    if syy > 0.0 { syp / syy } else { 0.0 }
 }
 
 #[cfg(test)]

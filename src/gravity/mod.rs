@@ -189,10 +189,17 @@ impl Plugin for GravityPlugin {
                         .in_set(GravitySystems::Kick),
                 ),
             );
-        // Runs only if the fluid plugin runs its sub-steps.
+        // Runs only if the fluid plugin runs its sub-steps: the field at the sub-step's
+        // positions, then its pull on the fluid particles that have a mass.
         app.add_systems(
             SphSubstep,
-            systems::apply_gravity_to_fluid.in_set(SphSubstepSystems::FieldForces),
+            (
+                systems::compute_gravity_field,
+                systems::apply_gravity_to_fluid,
+            )
+                .chain()
+                .run_if(systems::fluid_has_mass)
+                .in_set(SphSubstepSystems::FieldForces),
         );
     }
 }
