@@ -95,6 +95,16 @@ impl Target {
         }
     }
 
+    /// The largest error a solve may leave: the caller's bound `largest` (if positive), within
+    /// [`LARGEST_ERROR_RATIO`] times the tolerance on the mean.
+    pub(super) fn largest(self, largest: f32, tolerance: f32) -> f32 {
+        if largest > 0.0 {
+            largest.min(LARGEST_ERROR_RATIO * tolerance)
+        } else {
+            LARGEST_ERROR_RATIO * tolerance
+        }
+    }
+
     /// The fraction of the last sub-step's stiffness a solve starts from: all of it for the
     /// density, half for the divergence, as Bender & Koschier do.
     fn warm_start(self) -> f32 {
@@ -388,12 +398,7 @@ impl Dfsph {
     ) -> (u32, f32) {
         let n = self.state.len();
         let (tolerance, min_iterations, max_iterations) = target.limits(settings);
-        // The largest error allowed: the caller's bound, within the ratio to the mean's.
-        let largest = if largest > 0.0 {
-            largest.min(LARGEST_ERROR_RATIO * tolerance)
-        } else {
-            LARGEST_ERROR_RATIO * tolerance
-        };
+        let largest = target.largest(largest, tolerance);
         let inv_dt_sq = 1.0 / (dt * dt);
         let expansion = self.expansion_step;
         let kappa = match target {
