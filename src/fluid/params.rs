@@ -119,9 +119,9 @@ pub struct DfsphSettings {
     /// Mean density change over one step `dt (Dρ/Dt)/ρ₀` the divergence solve stops at, as a
     /// fraction (0.01 = 1%).
     pub divergence_tolerance: f32,
-    /// Most Jacobi iterations of the density solve per sub-step.
+    /// Most iterations of the density solve per sub-step.
     pub max_density_iterations: u32,
-    /// Most Jacobi iterations of the divergence solve per sub-step (0 switches it off).
+    /// Most iterations of the divergence solve per sub-step (0 switches it off).
     pub max_divergence_iterations: u32,
     /// Start each solve from the last sub-step's pressures.
     pub warm_start: bool,

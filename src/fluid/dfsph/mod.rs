@@ -133,9 +133,9 @@ struct Scratch {
 /// What the last sub-step's solves did.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct DfsphReport {
-    /// Jacobi iterations of the density solve.
+    /// Iterations of the density solve.
     pub density_iterations: u32,
-    /// Jacobi iterations of the divergence solve.
+    /// Iterations of the divergence solve.
     pub divergence_iterations: u32,
     /// Mean predicted density error left after the density solve, fraction.
     pub density_error: f32,
@@ -582,7 +582,8 @@ fn lattice_neighbors(c: &SphConstants) -> u32 {
 /// interior of the rest lattice: with a stiffness wave `κ = e^{ik·x}`, the operator is
 /// `|S(k)|²` with `S(k) = Σⱼ gⱼ sin(k·dⱼ)` over the neighbour offsets `dⱼ`, the diagonal `Σⱼ |gⱼ|²`.
 /// It is above 2 in 2D (about 2.5 for the Wendland kernel at 2.5 spacings, 3.3 at 3), so the
-/// plain Jacobi update of Bender & Koschier diverges here (measured) and is relaxed.
+/// plain Jacobi update of Bender & Koschier diverges here (measured); the solve's projected
+/// gradient steps take `1/λ_max`.
 fn lattice_spectral_radius<G: RadialKernel>(g: &G, c: &SphConstants) -> f32 {
     let reach = (c.support / c.spacing).ceil() as i32;
     let mut offsets = Vec::new();
