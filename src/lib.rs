@@ -197,7 +197,7 @@ pub mod prelude {
         Tank,
     };
     pub use crate::gravity::{
-        GalaxyDisc, GravityAcceleration, GravityParams, GravityPlugin, GravityStats,
+        FluidPlanets, GalaxyDisc, GravityAcceleration, GravityParams, GravityPlugin, GravityStats,
         GravitySystems, Mass, Multipole,
     };
     #[cfg(feature = "render")]

@@ -5,8 +5,8 @@ use bevy::prelude::*;
 use bevy::time::TimeUpdateStrategy;
 use bevy_sph2d::fluid::{FluidBlock, Position, SphParams, SphPlugin, Velocity};
 use bevy_sph2d::gravity::{
-    FieldQuery, GalaxyDisc, GravityParams, GravityPlugin, GravityStats, Mass, Multipole, QuadTree,
-    direct_field_at,
+    FieldQuery, FluidPlanets, GalaxyDisc, GravityParams, GravityPlugin, GravityStats, Mass,
+    Multipole, QuadTree, direct_field_at,
 };
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -405,48 +405,25 @@ fn a_body_spawned_mid_tick_gets_its_field_before_its_first_kick() {
 #[test]
 fn a_merged_fluid_planet_keeps_its_energy_and_momentum() {
     let seconds = 60.0;
-    let params = SphParams {
-        tank: None,
-        gravity: Vec2::ZERO,
-        particle_spacing: 0.01,
-        support_ratio: 2.5,
-        speed_of_sound: 10.0,
-        artificial_viscosity: 0.1,
-        max_substeps: 40,
-        ..SphParams::water()
-    };
+    let scene = FluidPlanets::default();
+    let params = scene.fluid_params();
     let mass = params.particle_mass();
     let tick = 1.0 / 64.0;
     let mut app = App::new();
     app.add_plugins((
         MinimalPlugins,
         SphPlugin::default().with_params(params.clone()),
-        GravityPlugin::default().with_params(GravityParams {
-            gravitational_constant: 2.0e-3,
-            theta: 0.6,
-            softening: 0.01,
-            ..default()
-        }),
+        GravityPlugin::default().with_params(scene.gravity_params()),
     ))
     .insert_resource(Time::<Fixed>::from_duration(Duration::from_secs_f64(tick)))
     .insert_resource(TimeUpdateStrategy::FixedTimesteps(1));
-    let (radius, speed) = (0.15f32, 0.25f32);
-    for (centre, velocity) in [
-        (Vec2::new(-0.4, 0.03), Vec2::new(speed, 0.0)),
-        (Vec2::new(0.4, -0.03), Vec2::new(-speed, 0.0)),
-    ] {
-        let square = FluidBlock::new(centre - Vec2::splat(radius), Vec2::splat(2.0 * radius))
-            .with_hydrostatic(false);
-        for p in square.positions(params.particle_spacing) {
-            if p.distance(centre) < radius {
-                app.world_mut().spawn((
-                    bevy_sph2d::fluid::FluidParticle,
-                    Position(p),
-                    Velocity(Vec2::ZERO + velocity),
-                    Mass(mass),
-                ));
-            }
-        }
+    for (p, v) in scene.particles(params.particle_spacing) {
+        app.world_mut().spawn((
+            bevy_sph2d::fluid::FluidParticle,
+            Position(p),
+            Velocity(v),
+            Mass(mass),
+        ));
     }
     app.update();
     let ticks = (seconds / tick) as usize;

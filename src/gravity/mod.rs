@@ -18,7 +18,7 @@ use bevy::prelude::*;
 pub use kernel::simd_path;
 pub use params::{GravityParams, GravityParamsError, GravityParamsStatus};
 pub use quadtree::{Field, FieldQuery, Multipole, Node, QuadTree, direct_field_at};
-pub use scenario::{GalaxyDisc, GravityScenario};
+pub use scenario::{FluidPlanets, GalaxyDisc, GravityScenario};
 pub use systems::{GravitySolver, GravityStats};
 
 /// Builds the tree and evaluates every body's field now, without moving anything (for reading

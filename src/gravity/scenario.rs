@@ -1,10 +1,11 @@
-//! A rotating disc of bodies around a heavy centre (the galaxy scenario), generated from a
-//! seed. See [`GravityPlugin`](crate::gravity::GravityPlugin).
+//! Ready-made gravity scenes: a rotating disc of bodies around a heavy centre (the galaxy
+//! scenario), generated from a seed, and two self-gravitating discs of water that merge. See
+//! [`GravityPlugin`](crate::gravity::GravityPlugin).
 
-use super::Mass;
+use super::{GravityParams, Mass};
 use crate::body::{Position, Velocity};
 use crate::control::ResetSimulation;
-use crate::fluid::FluidParticle;
+use crate::fluid::{FluidBlock, FluidParticle, SphParams};
 use bevy::prelude::*;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -173,5 +174,75 @@ mod tests {
             assert!(p.length() <= 1.0 && p.length() >= 0.199);
             assert!(p.perp_dot(*v) > 0.0 && p.dot(*v).abs() < 1e-4);
         }
+    }
+}
+
+/// Two discs of water in empty space, approaching off-centre, that merge under their own
+/// gravity into one "planet" (the `planet` example's scene, and the test that holds its energy
+/// and momentum).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FluidPlanets {
+    /// Radius of each disc, m.
+    pub radius: f32,
+    /// Speed each disc approaches at, m/s.
+    pub speed: f32,
+}
+
+impl Default for FluidPlanets {
+    fn default() -> Self {
+        Self {
+            radius: 0.15,
+            speed: 0.25,
+        }
+    }
+}
+
+impl FluidPlanets {
+    /// Water without a tank or uniform gravity; a slow speed of sound suits the discs' small
+    /// pressures (10 times their surface speed), and a little more artificial viscosity calms
+    /// the merger.
+    pub fn fluid_params(&self) -> SphParams {
+        SphParams {
+            tank: None,
+            gravity: Vec2::ZERO,
+            particle_spacing: 0.01,
+            support_ratio: 2.5,
+            speed_of_sound: 10.0,
+            artificial_viscosity: 0.1,
+            max_substeps: 40,
+            ..SphParams::water()
+        }
+    }
+
+    /// Gravity strong enough for a surface gravity `G M / R²` of about 5 m/s².
+    pub fn gravity_params(&self) -> GravityParams {
+        GravityParams {
+            gravitational_constant: 2.0e-3,
+            theta: 0.6,
+            softening: 0.01,
+            ..GravityParams::default()
+        }
+    }
+
+    /// Each particle's position and velocity (m, m/s) at `spacing` (m): lattice points inside
+    /// the two discs, centred 0.8 m apart and 0.06 m off-line.
+    pub fn particles(&self, spacing: f32) -> Vec<(Vec2, Vec2)> {
+        let mut out = Vec::new();
+        for (centre, velocity) in [
+            (Vec2::new(-0.4, 0.03), Vec2::new(self.speed, 0.0)),
+            (Vec2::new(0.4, -0.03), Vec2::new(-self.speed, 0.0)),
+        ] {
+            let square = FluidBlock::new(
+                centre - Vec2::splat(self.radius),
+                Vec2::splat(2.0 * self.radius),
+            )
+            .with_hydrostatic(false);
+            for p in square.positions(spacing) {
+                if p.distance(centre) < self.radius {
+                    out.push((p, velocity));
+                }
+            }
+        }
+        out
     }
 }

@@ -77,18 +77,21 @@ pub(crate) fn bodies_added(added: Query<(), Added<Mass>>) -> bool {
     !added.is_empty()
 }
 
+/// What the field pass reads and writes per body.
+type FieldData = (
+    &'static Position,
+    &'static Mass,
+    &'static mut GravitySlot,
+    &'static mut GravityAcceleration,
+    &'static mut GravityPotential,
+);
+
 /// Builds the tree over every body, evaluates the field at every body (group walk, in parallel
 /// on rayon), and stores each body's acceleration and potential (`par_iter_mut`).
 pub(crate) fn compute_gravity_field(
     mut solver: ResMut<GravitySolver>,
     mut stats: ResMut<GravityStats>,
-    mut bodies: Query<(
-        &Position,
-        &Mass,
-        &mut GravitySlot,
-        &mut GravityAcceleration,
-        &mut GravityPotential,
-    )>,
+    mut bodies: Query<FieldData>,
 ) {
     let started = Instant::now();
     let solver = &mut *solver;
@@ -152,15 +155,7 @@ pub(crate) fn compute_gravity_field(
 /// feels a far group's centre of mass while the group's bodies feel it one by one), and the
 /// remainder pushed a merged fluid planet off at 2.4 kg·m/s in 60 s; it is a small share of
 /// the tree's error (about 3·10⁻⁴ of `Σm|a|` there), so the accuracy is unchanged.
-fn remove_net_force(
-    bodies: &mut Query<(
-        &Position,
-        &Mass,
-        &mut GravitySlot,
-        &mut GravityAcceleration,
-        &mut GravityPotential,
-    )>,
-) {
+fn remove_net_force(bodies: &mut Query<FieldData>) {
     let (mut force, mut mass) = ([0.0f64; 2], 0.0f64);
     for (_, m, _, a, _) in bodies.iter() {
         if m.0.is_finite() && a.0.is_finite() {

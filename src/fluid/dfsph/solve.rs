@@ -317,6 +317,17 @@ impl<P: Parallel> Solve<'_, P> {
         )
     }
 
+    /// A proportioning step along the chopped gradient, with its exact length; `None` when the
+    /// tally has no compressed particle at zero pressure (or the step is degenerate).
+    fn proportion(&mut self, tally: Tally) -> Option<Tally> {
+        if tally.chopped <= 0.0 {
+            return None;
+        }
+        let d = self.set_direction(Next::Chopped);
+        let curvature = self.push_direction();
+        (d.slope > 0.0 && curvature > 0.0).then(|| self.advance((d.slope / curvature) as f32))
+    }
+
     /// The projected gradient step of an expansion: sets the direction to `κ − max(κ − ᾱ M⁻¹g,
     /// 0)` on the free set, the change that [`advance`](Self::advance) by one makes.
     fn set_projection(&mut self, length: f32) {
@@ -463,31 +474,20 @@ impl Dfsph {
             iterations += 1;
             // Proportional: the free set can still gain more than the chopped gradient offers.
             let proportional = tally.chopped <= PROPORTIONING * PROPORTIONING * tally.reduced_free;
-            if !proportional {
-                let d = solve.set_direction(Next::Chopped);
-                let curvature = solve.push_direction();
-                if d.slope <= 0.0 || curvature <= 0.0 {
-                    break;
-                }
-                tally = solve.advance((d.slope / curvature) as f32);
-                next = Next::Free;
-                continue;
-            }
-            let d = solve.set_direction(next);
-            let curvature = solve.push_direction();
+            let (d, curvature) = if proportional {
+                let d = solve.set_direction(next);
+                (d, solve.push_direction())
+            } else {
+                (Direction::default(), 0.0)
+            };
             if d.slope <= 0.0 || curvature <= 0.0 {
-                // Nothing left to gain on the free set; release or take pressure instead.
-                if tally.chopped > 0.0 {
-                    let d = solve.set_direction(Next::Chopped);
-                    let curvature = solve.push_direction();
-                    if d.slope <= 0.0 || curvature <= 0.0 {
-                        break;
-                    }
-                    tally = solve.advance((d.slope / curvature) as f32);
-                    next = Next::Free;
-                    continue;
+                // Not proportional, or nothing left to gain on the free set: compressed
+                // particles at zero pressure take pressure (a proportioning step).
+                match solve.proportion(tally) {
+                    Some(after) => (tally, next) = (after, Next::Free),
+                    None => break,
                 }
-                break;
+                continue;
             }
             let step = (d.slope / curvature) as f32;
             if step <= d.feasible_step {
