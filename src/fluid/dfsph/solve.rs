@@ -267,18 +267,18 @@ impl<P: Parallel> Solve<'_, P> {
         )
     }
 
-    /// Sets the errors from the velocities (exactly, no recurrence) and tallies them.
-    fn evaluate(&mut self) -> Tally {
+    /// Sets the errors from `velocity`, the velocities the unknowns start from, and tallies
+    /// them.
+    fn evaluate(&mut self, velocity: &[Vec2]) -> Tally {
         let (rows, state, stride, dt) = (self.rows, self.state, self.stride, self.dt);
         let (target, expansion) = (self.target, self.expansion);
-        let velocity: Vec<Vec2> = self.unknowns.iter().map(|x| x.velocity).collect();
         fold_slots(
             self.unknowns,
             self.parallel,
             |slot, x| {
                 let s = state[slot];
                 if x.inverse_diagonal > 0.0 {
-                    let rate = density_rate(rows, stride, s, slot, &velocity);
+                    let rate = density_rate(rows, stride, s, slot, velocity);
                     x.error = target.error(dt, rate, &s);
                 }
                 tally(x, 0.0, expansion)
@@ -458,7 +458,7 @@ impl Dfsph {
             expansion,
             parallel,
         };
-        solve.evaluate();
+        solve.evaluate(&self.velocity);
         solve.push_direction();
         let mut tally = solve.advance(1.0);
         let mut iterations = 0u32;
