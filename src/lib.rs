@@ -40,7 +40,21 @@
 //! - [`ParamsError`], [`ParamsStatus`] and [`ParamTable`]: the one parameters pattern of
 //!   [`SphParams`](fluid::SphParams) and [`GravityParams`](gravity::GravityParams).
 //!
-//! With `--no-default-features` only the simulation is compiled: no window, renderer or egui.
+//! # Cargo features
+//!
+//! | feature | default | what it brings |
+//! | --- | --- | --- |
+//! | `render` | yes | the liquid view, sprites, mouse and keyboard tools; a window through winit with X11 |
+//! | `egui` | yes | the tweak panel and the demo plugin (implies `render`) |
+//! | `parallel` | yes | threads: Bevy's multi-threaded task pools and the crate's rayon pool for the passes over particles |
+//! | `wayland` | no | Wayland windows beside X11 (Bevy's `wayland`, implies `render`) |
+//!
+//! With `--no-default-features` only the simulation is compiled: no window, renderer or egui,
+//! and no threads. Without `parallel` every pass runs on the calling thread and nothing is
+//! spawned (rayon's parallel iterators run in order on it), for targets without threads such as
+//! the web; the results are the threaded build's bit for bit (CI compares them). A build
+//! without a file system gives the save slot a storage of its own
+//! ([`fluid::SnapshotStorage`]).
 //!
 //! The pure algorithms have no ECS in them and can be used on their own: the smoothing kernels
 //! ([`fluid::kernels`]), the cell-list neighbour search ([`fluid::NeighborGrid`]), the whole

@@ -1,5 +1,7 @@
 //! Same seed, same run: bit for bit, across repeated runs, across thread counts (through the
-//! ECS and on plain slices), and different for a different seed.
+//! ECS and on plain slices), and different for a different seed. Built without the `parallel`
+//! feature (one thread), the ECS checks across thread counts do not apply; `.ci/run` compares
+//! that build's fingerprints with the threaded build's instead.
 
 mod common;
 
@@ -7,7 +9,6 @@ use bevy::prelude::*;
 use bevy_sph2d::fluid::SliceFluid;
 use bevy_sph2d::fluid::{FluidBlock, Obstacle, PressureSolver, SphParams, Tank};
 use common::*;
-use std::process::Command;
 
 fn params() -> SphParams {
     params_for(PressureSolver::Wcsph)
@@ -123,23 +124,26 @@ fn fingerprint_with_threads_from_env() {
 }
 
 #[test]
+#[cfg(feature = "parallel")]
 fn ecs_is_deterministic_across_thread_counts() {
     ecs_across_thread_counts("wcsph", params(), 25);
 }
 
 #[test]
+#[cfg(feature = "parallel")]
 fn ecs_is_deterministic_across_thread_counts_dfsph() {
     let p = dfsph_fine();
     assert!(block(1).positions_for(&p).len() > bevy_sph2d::fluid::parallel::PARALLEL_SLOTS);
     ecs_across_thread_counts("dfsph-fine", p, 4);
 }
 
+#[cfg(feature = "parallel")]
 fn ecs_across_thread_counts(case: &str, p: SphParams, ticks: usize) {
     let exe = std::env::current_exe().expect("test binary");
     let fingerprints: Vec<(String, String)> = [1, 2, 4]
         .iter()
         .map(|threads| {
-            let out = Command::new(&exe)
+            let out = std::process::Command::new(&exe)
                 .args([
                     "fingerprint_with_threads_from_env",
                     "--exact",

@@ -142,3 +142,64 @@ fn the_slot_commands_save_and_load_a_file() {
     assert!(matches!(&slot.status, Some(Err(_))), "{:?}", slot.status);
     assert_eq!(states(&mut app).len(), before.len());
 }
+
+/// Keeps the slot's text in memory, as a build without a file system would.
+#[derive(Default, Clone)]
+struct Memory(std::sync::Arc<std::sync::Mutex<Option<String>>>);
+
+impl bevy_sph2d::fluid::SnapshotStorage for Memory {
+    fn write(
+        &self,
+        _: &std::path::Path,
+        text: &str,
+    ) -> Result<(), bevy_sph2d::fluid::SnapshotError> {
+        *self.0.lock().unwrap() = Some(text.to_owned());
+        Ok(())
+    }
+
+    fn read(&self, path: &std::path::Path) -> Result<String, bevy_sph2d::fluid::SnapshotError> {
+        self.0.lock().unwrap().clone().ok_or_else(|| {
+            bevy_sph2d::fluid::SnapshotError::Io(format!("{}: empty", path.display()))
+        })
+    }
+}
+
+#[test]
+fn the_slot_commands_go_through_the_slots_storage() {
+    let mut app = create_app(params(SphParams::water()));
+    spawn(&mut app, FluidBlock::dam_break(0.1, 0.1));
+    let memory = Memory::default();
+    let path = std::path::PathBuf::from("no/such/folder/slot.json");
+    app.world_mut().insert_resource(
+        bevy_sph2d::fluid::SnapshotSlot {
+            path: path.clone(),
+            ..default()
+        }
+        .with_storage(memory.clone()),
+    );
+    let before = states(&mut app);
+    app.world_mut()
+        .commands()
+        .queue(bevy_sph2d::fluid::SaveSlot);
+    app.world_mut().flush();
+    assert!(memory.0.lock().unwrap().is_some(), "nothing was stored");
+    assert!(!path.exists());
+    run(&mut app, 20);
+    app.world_mut()
+        .commands()
+        .queue(bevy_sph2d::fluid::LoadSlot);
+    app.world_mut().flush();
+    let slot = app.world().resource::<bevy_sph2d::fluid::SnapshotSlot>();
+    assert!(
+        matches!(&slot.status, Some(Ok(m)) if m.contains("loaded")),
+        "{:?}",
+        slot.status
+    );
+    assert_eq!(
+        before.iter().map(|s| s.position).collect::<Vec<_>>(),
+        states(&mut app)
+            .iter()
+            .map(|s| s.position)
+            .collect::<Vec<_>>()
+    );
+}

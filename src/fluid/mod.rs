@@ -40,8 +40,8 @@ pub use kernels::KernelKind;
 pub use params::{DfsphSettings, PressureSolver, SphParams, SphParamsError};
 pub use region::FluidRegion;
 pub use save::{
-    LoadSlot, SaveSlot, SnapshotError, SnapshotSlot, load_fluid, load_fluid_from, save_fluid,
-    save_fluid_to,
+    FileStorage, LoadSlot, SaveSlot, SnapshotError, SnapshotSlot, SnapshotStorage, load_fluid,
+    load_fluid_from, save_fluid, save_fluid_to,
 };
 pub use scenario::{SCENARIO_TANK, ScenarioKind, SphScenario};
 pub use sensors::{

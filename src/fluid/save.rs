@@ -208,24 +208,94 @@ pub fn load_fluid(world: &mut World, text: &str) -> Result<usize, SnapshotError>
 /// [`save_fluid`] into the file at `path`.
 pub fn save_fluid_to(world: &mut World, path: &std::path::Path) -> Result<(), SnapshotError> {
     let text = save_fluid(world)?;
-    std::fs::write(path, text).map_err(|e| SnapshotError::Io(format!("{}: {e}", path.display())))
+    FileStorage.write(path, &text)
 }
 
 /// [`load_fluid`] from the file at `path`.
 pub fn load_fluid_from(world: &mut World, path: &std::path::Path) -> Result<usize, SnapshotError> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| SnapshotError::Io(format!("{}: {e}", path.display())))?;
+    let text = FileStorage.read(path)?;
     load_fluid(world, &text)
+}
+
+/// Where a [`SnapshotSlot`] keeps its text, by the slot's path: files by default
+/// ([`FileStorage`]). A build without a file system (the web, say) puts its own storage in the
+/// slot, the browser's local storage under the path as a key for instance, and the keyboard's
+/// and the panel's save and load go there instead:
+///
+/// ```
+/// use bevy_sph2d::fluid::{SnapshotError, SnapshotSlot, SnapshotStorage};
+/// use std::{collections::HashMap, path::Path, sync::Mutex};
+///
+/// /// Keeps the slots in memory.
+/// #[derive(Default)]
+/// struct Memory(Mutex<HashMap<String, String>>);
+///
+/// impl SnapshotStorage for Memory {
+///     fn write(&self, path: &Path, text: &str) -> Result<(), SnapshotError> {
+///         let key = path.display().to_string();
+///         self.0.lock().unwrap().insert(key, text.to_owned());
+///         Ok(())
+///     }
+///     fn read(&self, path: &Path) -> Result<String, SnapshotError> {
+///         let key = path.display().to_string();
+///         let slots = self.0.lock().unwrap();
+///         slots.get(&key).cloned().ok_or(SnapshotError::Io(format!("{key}: empty")))
+///     }
+/// }
+///
+/// let slot = SnapshotSlot::default().with_storage(Memory::default());
+/// # let _ = slot;
+/// ```
+pub trait SnapshotStorage: Send + Sync + 'static {
+    /// Stores `text` under `path`.
+    fn write(&self, path: &std::path::Path, text: &str) -> Result<(), SnapshotError>;
+    /// The text stored under `path`.
+    fn read(&self, path: &std::path::Path) -> Result<String, SnapshotError>;
+}
+
+/// [`SnapshotStorage`] in files (`std::fs`), the path relative to the working directory.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct FileStorage;
+
+impl SnapshotStorage for FileStorage {
+    fn write(&self, path: &std::path::Path, text: &str) -> Result<(), SnapshotError> {
+        std::fs::write(path, text)
+            .map_err(|e| SnapshotError::Io(format!("{}: {e}", path.display())))
+    }
+
+    fn read(&self, path: &std::path::Path) -> Result<String, SnapshotError> {
+        std::fs::read_to_string(path)
+            .map_err(|e| SnapshotError::Io(format!("{}: {e}", path.display())))
+    }
 }
 
 /// Where the keyboard's and the panel's save and load go (`F5` saves, `F9` loads), and how the
 /// last one went.
-#[derive(Resource, Debug, Clone, PartialEq)]
+#[derive(Resource, Clone)]
 pub struct SnapshotSlot {
-    /// The slot's file.
+    /// The slot's file (its key in a storage that has no files).
     pub path: std::path::PathBuf,
     /// What the last save or load did, for the panel.
     pub status: Option<Result<String, String>>,
+    /// Where the text goes: files unless [`with_storage`](Self::with_storage) says otherwise.
+    pub storage: std::sync::Arc<dyn SnapshotStorage>,
+}
+
+impl SnapshotSlot {
+    /// The slot with its text kept in `storage` instead of files.
+    pub fn with_storage(mut self, storage: impl SnapshotStorage) -> Self {
+        self.storage = std::sync::Arc::new(storage);
+        self
+    }
+}
+
+impl std::fmt::Debug for SnapshotSlot {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("SnapshotSlot")
+            .field("path", &self.path)
+            .field("status", &self.status)
+            .finish_non_exhaustive()
+    }
 }
 
 impl Default for SnapshotSlot {
@@ -233,24 +303,31 @@ impl Default for SnapshotSlot {
         Self {
             path: "bevy_sph2d_slot.json".into(),
             status: None,
+            storage: std::sync::Arc::new(FileStorage),
         }
     }
 }
 
-/// Runs `action` on the [`SnapshotSlot`]'s file and records how it went (warning on failure).
+/// Runs `action` on the [`SnapshotSlot`]'s path and storage and records how it went (warning
+/// on failure).
 fn with_slot(
     world: &mut World,
-    action: impl FnOnce(&mut World, &std::path::Path) -> Result<String, SnapshotError>,
+    action: impl FnOnce(
+        &mut World,
+        &std::path::Path,
+        &dyn SnapshotStorage,
+    ) -> Result<String, SnapshotError>,
 ) {
-    let path = world.get_resource_or_init::<SnapshotSlot>().path.clone();
-    let status = action(world, &path).map_err(|error| {
+    let slot = world.get_resource_or_init::<SnapshotSlot>();
+    let (path, storage) = (slot.path.clone(), slot.storage.clone());
+    let status = action(world, &path, storage.as_ref()).map_err(|error| {
         warn!("{error}");
         error.to_string()
     });
     world.resource_mut::<SnapshotSlot>().status = Some(status);
 }
 
-/// A command that saves the fluid into the [`SnapshotSlot`]'s file.
+/// A command that saves the fluid into the [`SnapshotSlot`].
 #[derive(Debug, Clone, Copy, Default)]
 pub struct SaveSlot;
 
@@ -258,14 +335,15 @@ impl Command for SaveSlot {
     type Out = ();
 
     fn apply(self, world: &mut World) {
-        with_slot(world, |world, path| {
-            save_fluid_to(world, path).map(|()| format!("saved to {}", path.display()))
+        with_slot(world, |world, path, storage| {
+            let text = save_fluid(world)?;
+            storage.write(path, &text)?;
+            Ok(format!("saved to {}", path.display()))
         });
     }
 }
 
-/// A command that loads the fluid from the [`SnapshotSlot`]'s file (nothing changes if it
-/// cannot).
+/// A command that loads the fluid from the [`SnapshotSlot`] (nothing changes if it cannot).
 #[derive(Debug, Clone, Copy, Default)]
 pub struct LoadSlot;
 
@@ -273,9 +351,9 @@ impl Command for LoadSlot {
     type Out = ();
 
     fn apply(self, world: &mut World) {
-        with_slot(world, |world, path| {
-            load_fluid_from(world, path)
-                .map(|n| format!("loaded {n} particles from {}", path.display()))
+        with_slot(world, |world, path, storage| {
+            let n = load_fluid(world, &storage.read(path)?)?;
+            Ok(format!("loaded {n} particles from {}", path.display()))
         });
     }
 }

@@ -23,7 +23,8 @@ use rayon::prelude::*;
 /// Smallest number of particles a rayon task takes (keeps scheduling overhead low).
 const MIN_PARTICLES_PER_TASK: usize = 512;
 
-/// Fluid particles as a structure of arrays, stepped with rayon.
+/// Fluid particles as a structure of arrays, stepped with rayon on the caller's current pool
+/// (on the calling thread without the `parallel` feature).
 #[derive(Debug, Clone)]
 pub struct SliceFluid {
     constants: SphConstants,
@@ -123,14 +124,16 @@ impl SliceFluid {
     /// through the clock.
     fn substep(
         &mut self,
-        take: impl FnOnce(&mut SubstepClock, &SphConstants, f32, bool) -> f32,
+        take: impl FnOnce(&mut SubstepClock, &SphConstants, f32, bool) -> f32 + Send,
     ) -> f32 {
-        self.snapshot
-            .rebuild(&self.constants, &self.position, &self.velocity, &Rayon);
-        match self.constants.solver {
-            PressureSolver::Wcsph => self.wcsph_substep(take),
-            PressureSolver::Dfsph => self.dfsph_substep(take),
-        }
+        crate::compute::current(|| {
+            self.snapshot
+                .rebuild(&self.constants, &self.position, &self.velocity, &Rayon);
+            match self.constants.solver {
+                PressureSolver::Wcsph => self.wcsph_substep(take),
+                PressureSolver::Dfsph => self.dfsph_substep(take),
+            }
+        })
     }
 
     /// WCSPH: density and pressure, wall pressure, forces, integration.
