@@ -47,7 +47,7 @@
 //! | `render` | yes | the liquid view, sprites, mouse and keyboard tools; a window through winit with X11 |
 //! | `egui` | yes | the tweak panel and the demo plugin (implies `render`) |
 //! | `parallel` | yes | threads: Bevy's multi-threaded task pools and the crate's rayon pool for the passes over particles |
-//! | `wayland` | no | Wayland windows beside X11 (Bevy's `wayland`, implies `render`) |
+//! | `wayland` | no | Wayland windows beside X11 (Bevy's `wayland`, implies `render`; building it needs `pkg-config` and `libwayland-dev`) |
 //!
 //! With `--no-default-features` only the simulation is compiled: no window, renderer or egui,
 //! and no threads. Without `parallel` every pass runs on the calling thread and nothing is
