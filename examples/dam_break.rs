@@ -15,19 +15,9 @@ fn main() {
         .nth(1)
         .and_then(|a| a.parse().ok())
         .unwrap_or(2500);
-    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
     App::new()
         .add_plugins((
-            DefaultPlugins
-                .set(WindowPlugin {
-                    primary_window: Some(Window {
-                        title: "bevy_sph2d: dam break".into(),
-                        resolution: (1280, 720).into(),
-                        ..default()
-                    }),
-                    ..default()
-                })
-                .set(bevy_sph2d::task_pool_plugin(threads)),
+            bevy_sph2d::demo::window_plugins("bevy_sph2d: dam break"),
             SphDemoPlugin::dam_break(particles),
         ))
         .run();

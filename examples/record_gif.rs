@@ -44,19 +44,9 @@ struct Recording {
 
 fn main() {
     let cli = Cli::parse();
-    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
     App::new()
         .add_plugins((
-            DefaultPlugins
-                .set(WindowPlugin {
-                    primary_window: Some(Window {
-                        title: "bevy_sph2d: recording".into(),
-                        resolution: (1280, 720).into(),
-                        ..default()
-                    }),
-                    ..default()
-                })
-                .set(bevy_sph2d::task_pool_plugin(threads)),
+            bevy_sph2d::demo::window_plugins("bevy_sph2d: recording"),
             SphDemoPlugin::dam_break(cli.particles),
         ))
         .insert_resource(cli)

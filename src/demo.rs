@@ -28,6 +28,22 @@ impl SphDemoPlugin {
     }
 }
 
+/// `DefaultPlugins` for a demo window: a 1280 × 720 window titled `title`, and Bevy's compute
+/// pool on every core ([`task_pool_plugin`](crate::task_pool_plugin)).
+pub fn window_plugins(title: &str) -> impl PluginGroup {
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    DefaultPlugins
+        .set(WindowPlugin {
+            primary_window: Some(Window {
+                title: title.into(),
+                resolution: (1280, 720).into(),
+                ..default()
+            }),
+            ..default()
+        })
+        .set(crate::task_pool_plugin(threads))
+}
+
 /// Water tuned for interactive use in the scenario tank (1.6 m × 0.9 m), on the default
 /// incompressible solver:
 /// - the default support of 2 spacings (about 12 neighbours);

@@ -103,6 +103,22 @@ fn bad_snapshots_are_refused_and_change_nothing() {
     assert_eq!(app.world().resource::<SphParams>().particle_spacing, 0.01);
 }
 
+/// Queues a save or load `command` and applies it at once.
+fn slot_command(app: &mut App, command: impl Command) {
+    app.world_mut().commands().queue(command);
+    app.world_mut().flush();
+}
+
+/// The slot's last load succeeded.
+fn assert_slot_loaded(app: &App) {
+    let slot = app.world().resource::<bevy_sph2d::fluid::SnapshotSlot>();
+    assert!(
+        matches!(&slot.status, Some(Ok(m)) if m.contains("loaded")),
+        "{:?}",
+        slot.status
+    );
+}
+
 #[test]
 fn the_slot_commands_save_and_load_a_file() {
     let mut app = create_app(params(SphParams::water()));
@@ -112,21 +128,10 @@ fn the_slot_commands_save_and_load_a_file() {
         .resource_mut::<bevy_sph2d::fluid::SnapshotSlot>()
         .path = path.clone();
     let before = states(&mut app);
-    app.world_mut()
-        .commands()
-        .queue(bevy_sph2d::fluid::SaveSlot);
-    app.world_mut().flush();
+    slot_command(&mut app, bevy_sph2d::fluid::SaveSlot);
     run(&mut app, 20);
-    app.world_mut()
-        .commands()
-        .queue(bevy_sph2d::fluid::LoadSlot);
-    app.world_mut().flush();
-    let slot = app.world().resource::<bevy_sph2d::fluid::SnapshotSlot>();
-    assert!(
-        matches!(&slot.status, Some(Ok(m)) if m.contains("loaded")),
-        "{:?}",
-        slot.status
-    );
+    slot_command(&mut app, bevy_sph2d::fluid::LoadSlot);
+    assert_slot_loaded(&app);
     let after = states(&mut app);
     assert_eq!(
         before.iter().map(|s| s.position).collect::<Vec<_>>(),
@@ -134,10 +139,7 @@ fn the_slot_commands_save_and_load_a_file() {
     );
     let _ = std::fs::remove_file(&path);
     // A missing file: refused, nothing lost.
-    app.world_mut()
-        .commands()
-        .queue(bevy_sph2d::fluid::LoadSlot);
-    app.world_mut().flush();
+    slot_command(&mut app, bevy_sph2d::fluid::LoadSlot);
     let slot = app.world().resource::<bevy_sph2d::fluid::SnapshotSlot>();
     assert!(matches!(&slot.status, Some(Err(_))), "{:?}", slot.status);
     assert_eq!(states(&mut app).len(), before.len());
@@ -178,23 +180,12 @@ fn the_slot_commands_go_through_the_slots_storage() {
         .with_storage(memory.clone()),
     );
     let before = states(&mut app);
-    app.world_mut()
-        .commands()
-        .queue(bevy_sph2d::fluid::SaveSlot);
-    app.world_mut().flush();
+    slot_command(&mut app, bevy_sph2d::fluid::SaveSlot);
     assert!(memory.0.lock().unwrap().is_some(), "nothing was stored");
     assert!(!path.exists());
     run(&mut app, 20);
-    app.world_mut()
-        .commands()
-        .queue(bevy_sph2d::fluid::LoadSlot);
-    app.world_mut().flush();
-    let slot = app.world().resource::<bevy_sph2d::fluid::SnapshotSlot>();
-    assert!(
-        matches!(&slot.status, Some(Ok(m)) if m.contains("loaded")),
-        "{:?}",
-        slot.status
-    );
+    slot_command(&mut app, bevy_sph2d::fluid::LoadSlot);
+    assert_slot_loaded(&app);
     assert_eq!(
         before.iter().map(|s| s.position).collect::<Vec<_>>(),
         states(&mut app)
