@@ -284,9 +284,10 @@ fn realtime_bench(cli: &Cli) {
     }
     app.update();
     eprintln!(
-        "dam break at {:.4} m spacing, {} solver, {threads} threads",
+        "dam break at {:.4} m spacing, {} solver, {threads} threads, SIMD path {}",
         params.particle_spacing,
-        solver.label()
+        solver.label(),
+        bevy_sph2d::simd_path()
     );
     let started = Instant::now();
     let (mut density_iterations, mut divergence_iterations) = (0u64, 0u64);

@@ -78,6 +78,7 @@ mod params;
 #[cfg(feature = "render")]
 pub mod render;
 mod schedule;
+mod simd;
 
 pub use body::{Position, Velocity};
 pub use control::{
@@ -89,6 +90,7 @@ pub use schedule::{
     BodyForceSystems, ParticleSchedule, ParticleSchedulePlugin, ParticleSystems, SphSubstep,
     SphSubstepSystems,
 };
+pub use simd::simd_path;
 
 use bevy::app::{
     PluginGroup, PluginGroupBuilder, TaskPoolOptions, TaskPoolPlugin,

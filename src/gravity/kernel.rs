@@ -19,6 +19,8 @@
 //! reproducible on that kind of CPU (for any thread count), not bit for bit against an FMA
 //! CPU.
 
+pub use crate::simd::simd_path;
+use crate::simd::{Simd, mul_add, simd};
 use bevy::math::Vec2;
 
 /// Partial sums per point: 16, one AVX-512 register of `f32`, two of AVX2, four of SSE.
@@ -41,12 +43,6 @@ pub fn rsqrt<const FUSED: bool>(s: f32) -> f32 {
     let y = y * mul_add::<FUSED>(-t, y, 1.681_913_9);
     let t = 0.500_000_06 * s * y;
     y * mul_add::<FUSED>(-t, y, 1.500_000_4)
-}
-
-/// `a b + c`: fused (one rounding) on the FMA paths, two roundings on the baseline.
-#[inline(always)]
-fn mul_add<const FUSED: bool>(a: f32, b: f32, c: f32) -> f32 {
-    if FUSED { a.mul_add(b, c) } else { a * b + c }
 }
 
 /// Acceleration (per unit `G`, m/s² per (m³/(kg·s²))) and potential at `p` from the masses at
@@ -188,54 +184,6 @@ fn quadrupole<const F: bool>(dx: f32, dy: f32, m: f32, q: [f32; 3], eps: f32) ->
         m_inv2 * mul_add::<F>(ny, radial, -qy),
         m_inv * mul_add::<F>(0.5, nqn, 1.0),
     )
-}
-
-/// The code path the sums take on this CPU.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Simd {
-    /// x86 with AVX-512F and FMA: 16 lanes in one register.
-    #[cfg(target_arch = "x86_64")]
-    Avx512,
-    /// x86 with AVX2 and FMA: two registers of 8.
-    #[cfg(target_arch = "x86_64")]
-    Avx2,
-    /// A target whose baseline has fused multiply-add (64-bit ARM: NEON).
-    Fused,
-    /// Anything else: the compiler's baseline SIMD, products rounded twice.
-    Baseline,
-}
-
-/// The widest path this CPU runs (the feature checks are cached by the standard library).
-#[inline]
-fn simd() -> Simd {
-    #[cfg(target_arch = "x86_64")]
-    {
-        use std::arch::is_x86_feature_detected as has;
-        if has!("fma") && has!("avx512f") {
-            return Simd::Avx512;
-        }
-        if has!("fma") && has!("avx2") {
-            return Simd::Avx2;
-        }
-    }
-    if cfg!(target_arch = "aarch64") {
-        Simd::Fused
-    } else {
-        Simd::Baseline
-    }
-}
-
-/// The path the sums take on this CPU, for benchmark lines: `avx512+fma`, `avx2+fma`, `fma`
-/// (64-bit ARM) or `baseline`.
-pub fn simd_path() -> &'static str {
-    match simd() {
-        #[cfg(target_arch = "x86_64")]
-        Simd::Avx512 => "avx512+fma",
-        #[cfg(target_arch = "x86_64")]
-        Simd::Avx2 => "avx2+fma",
-        Simd::Fused => "fma",
-        Simd::Baseline => "baseline",
-    }
 }
 
 #[cfg(target_arch = "x86_64")]

@@ -64,9 +64,12 @@ use super::kernels::RadialKernel;
 use super::layout::{FluidSnapshot, SlotVectors, Walls};
 use super::parallel::{CHUNK, Parallel, for_each_slot, run_jobs};
 use super::solver::{SphConstants, max_length, with_kernels};
+use crate::simd::Simd;
 use bevy::math::{Vec2, Vec4};
+use rows::{BLOCK, Rows};
 use solve::Target;
 
+mod rows;
 mod solve;
 
 pub use solve::{LARGEST_ERROR_RATIO, MAX_RELIEF_RATE};
@@ -88,15 +91,6 @@ pub const DEFICIENT_NEIGHBORHOOD: f32 = 0.6;
 /// mirrored, a particle at a wall holds the hydrostatic pressure of its depth instead of twice
 /// it, which matters where wall pressure is read).
 const WALL_MIRROR: f32 = 2.0;
-
-/// One cached fluid neighbour of a particle.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-struct Neighbor {
-    /// Sorted slot of the neighbour.
-    slot: u32,
-    /// `s V ∇Wᵢⱼ`, 1/m.
-    gradient: Vec2,
-}
 
 /// Per-particle values of the current sub-step, by sorted slot.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -146,8 +140,8 @@ pub struct DfsphReport {
 /// The divergence-free solver's state for one sub-step, by sorted slot (see the module docs).
 #[derive(Debug, Clone, Default)]
 pub struct Dfsph {
-    stride: usize,
-    rows: Vec<Neighbor>,
+    /// Each particle's cached fluid neighbours with their volume-weighted kernel gradients.
+    rows: Rows,
     /// `V Wᵢⱼ` of each cached neighbour, laid out as `rows` (the neighbour's share of the
     /// particle's density; apart from `rows`, which the iterations read, to keep those short).
     weights: Vec<f32>,
@@ -211,22 +205,21 @@ impl Dfsph {
         // kept short. A compressed particle with more neighbours makes them long enough for the
         // most seen, and the pass runs again.
         let lattice = lattice_neighbors(c) as usize;
-        let mut stride = (lattice + lattice / 2).next_multiple_of(4).max(self.stride);
+        let mut stride = (lattice + lattice / 2)
+            .next_multiple_of(BLOCK)
+            .max(self.rows.stride());
         loop {
             // Rows are written before they are read (up to each particle's count).
-            if self.rows.len() != n * stride {
-                self.rows.resize(n * stride, Neighbor::default());
-                self.weights.resize(n * stride, 0.0);
-            }
+            self.rows.resize(n, stride);
+            self.weights.resize(n * stride, 0.0);
             let most = with_kernels!(c.kernel, c.support, |w, g| {
                 self.gather_neighbors(&w, &g, c, fluid, walls, stride, parallel)
             });
             if most <= stride {
                 break;
             }
-            stride = (most + 4).next_multiple_of(4);
+            stride = (most + 4).next_multiple_of(BLOCK);
         }
-        self.stride = stride;
         self.report = DfsphReport::default();
         if warm {
             self.smooth_warm_start(c, parallel);
@@ -261,7 +254,7 @@ impl Dfsph {
         let mut jobs: Vec<_> = self
             .state
             .chunks_mut(CHUNK)
-            .zip(self.rows.chunks_mut(CHUNK * stride))
+            .zip(self.rows.chunks_mut(CHUNK))
             .zip(self.weights.chunks_mut(CHUNK * stride))
             .enumerate()
             .map(|(k, ((state, rows), weights))| (k * CHUNK, state, rows, weights, 0usize))
@@ -273,7 +266,6 @@ impl Dfsph {
             |(start, states, rows, weights, most)| {
                 for (k, state) in states.iter_mut().enumerate() {
                     let x = fluid.points.get(*start + k);
-                    let row = &mut rows[k * stride..(k + 1) * stride];
                     let row_weights = &mut weights[k * stride..(k + 1) * stride];
                     let mut len = 0usize;
                     let mut density = Vec4::ZERO;
@@ -299,10 +291,8 @@ impl Dfsph {
                             let lane = mask.trailing_zeros() as usize;
                             mask &= mask - 1;
                             if len < stride {
-                                row[len] = Neighbor {
-                                    slot: (first + lane) as u32,
-                                    gradient: Vec2::new(gx[lane], gy[lane]),
-                                };
+                                let gradient = Vec2::new(gx[lane], gy[lane]);
+                                rows.set(k, len, first + lane, gradient);
                                 row_weights[len] = values[lane];
                             }
                             len += 1;
@@ -340,16 +330,11 @@ impl Dfsph {
                         }
                     });
                     *most = (*most).max(len);
-                    // The row is padded to whole quads (see `quads`) with the particle itself at
+                    // The row is padded to whole blocks (see `Rows`) with the particle itself at
                     // zero gradient and weight, which adds nothing to any sum over it.
                     if len <= stride {
-                        for pad in len..len.next_multiple_of(4) {
-                            row[pad] = Neighbor {
-                                slot: (*start + k) as u32,
-                                gradient: Vec2::ZERO,
-                            };
-                            row_weights[pad] = 0.0;
-                        }
+                        rows.pad(k, len, *start + k);
+                        row_weights[len..len.next_multiple_of(BLOCK)].fill(0.0);
                     }
                     // A particle's own stiffness changes its density rate through its own velocity
                     // (pushed by its neighbours and the mirrored wall) and its neighbours'.
@@ -385,14 +370,15 @@ impl Dfsph {
             * w.value_sq_x4(Vec4::ZERO).x);
         let (rows, weights) = (&self.rows, &self.weights);
         let (state, kappa) = (&self.state, &self.kappa);
-        let stride = self.stride;
+        let stride = rows.stride();
         let mut smoothed = core::mem::take(&mut self.scratch.delta);
         smoothed.resize(kappa.len(), 0.0);
         for_each_slot(&mut smoothed, parallel, |slot, out| {
-            let range = slot * stride..slot * stride + state[slot].count as usize;
+            let count = state[slot].count;
             let (mut sum, mut weight) = (own * kappa[slot], own);
-            for (neighbor, &w) in rows[range.clone()].iter().zip(&weights[range]) {
-                sum += w * kappa[neighbor.slot as usize];
+            let row_weights = &weights[slot * stride..slot * stride + count as usize];
+            for ((j, _), &w) in rows.neighbors(slot, count).zip(row_weights) {
+                sum += w * kappa[j];
                 weight += w;
             }
             *out = sum / weight;
@@ -458,13 +444,11 @@ impl Dfsph {
         let to_mass_gradient = c.rest_density / c.gradient_scale;
         let laminar = 4.0 * c.kinematic_viscosity;
         let artificial = 2.0 * c.artificial_viscosity * c.speed_of_sound * h;
-        let row = &self.rows[slot * self.stride..slot * self.stride + s.count as usize];
         let mut a = Vec2::ZERO;
-        for neighbor in row {
-            let j = neighbor.slot as usize;
+        for (j, gradient) in self.rows.neighbors(slot, s.count) {
             let r = xi - fluid.points.get(j);
             let v = vi - self.velocity[j];
-            let mass_gradient = to_mass_gradient * neighbor.gradient;
+            let mass_gradient = to_mass_gradient * gradient;
             let r2 = r.length_squared();
             let inv = 1.0 / ((r2 + eta_sq) * (rho_i + self.state[j].density * c.rest_density));
             let approach = v.dot(r).min(0.0);
@@ -615,33 +599,10 @@ fn lattice_spectral_radius<G: RadialKernel>(g: &G, c: &SphConstants) -> f32 {
 
 /// `Σⱼ (xᵢ + xⱼ) gᵢⱼ + 2 xᵢ g_wall,ᵢ`: the pressure acceleration of stiffness `x` on particle
 /// `slot`, per unit stiffness (walls mirror the particle's own stiffness, [`WALL_MIRROR`]).
-#[inline]
-fn pressure_push(rows: &[Neighbor], stride: usize, s: SlotState, slot: usize, x: &[f32]) -> Vec2 {
+#[inline(always)]
+fn pressure_push(rows: &Rows, simd: Simd, s: &SlotState, slot: usize, x: &[f32]) -> Vec2 {
     let own = x[slot];
-    let (mut sum_x, mut sum_y) = (Vec4::ZERO, Vec4::ZERO);
-    for quad in quads(rows, stride, slot, s.count) {
-        let weight = Vec4::from_array(quad.map(|n| own + x[n.slot as usize]));
-        sum_x += weight * Vec4::from_array(quad.map(|n| n.gradient.x));
-        sum_y += weight * Vec4::from_array(quad.map(|n| n.gradient.y));
-    }
-    WALL_MIRROR * own * s.wall_gradient + Vec2::new(sum_quad(sum_x), sum_quad(sum_y))
-}
-
-/// The cached row of `slot` with `count` neighbours, as quads: [`Dfsph::prepare`] pads each
-/// row to a multiple of four with entries that add nothing (the particle itself, at zero
-/// gradient), so the iterations sum four neighbours at a time.
-#[inline]
-fn quads(rows: &[Neighbor], stride: usize, slot: usize, count: u32) -> &[[Neighbor; 4]] {
-    let start = slot * stride;
-    rows[start..start + (count as usize).next_multiple_of(4)]
-        .as_chunks::<4>()
-        .0
-}
-
-/// The sum of a quad's lanes, in a fixed order.
-#[inline]
-fn sum_quad(v: Vec4) -> f32 {
-    (v.x + v.y) + (v.z + v.w)
+    WALL_MIRROR * own * s.wall_gradient + rows.row(slot, s.count).push(simd, x, own)
 }
 
 #[cfg(test)]

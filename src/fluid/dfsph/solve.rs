@@ -29,10 +29,12 @@
 //! Every sum over particles is taken chunk by chunk in f64 ([`fold_slots`]), so the iterations,
 //! and with them every result, are the same on any number of threads.
 
-use super::{Dfsph, Neighbor, SlotState, WALL_MIRROR, pressure_push, quads, sum_quad};
+use super::rows::Rows;
+use super::{Dfsph, SlotState, WALL_MIRROR, pressure_push};
 use crate::fluid::parallel::{Parallel, fold_slots};
 use crate::fluid::params::DfsphSettings;
-use bevy::math::{Vec2, Vec4};
+use crate::simd::{Simd, simd};
+use bevy::math::Vec2;
 
 /// The largest error a solve may leave at any particle, as a multiple of its tolerance on the
 /// mean.
@@ -204,9 +206,10 @@ enum Next {
 
 /// The state of one solve, borrowed from [`Dfsph`] and its scratch.
 struct Solve<'a, P: Parallel> {
-    rows: &'a [Neighbor],
+    rows: &'a Rows,
     state: &'a [SlotState],
-    stride: usize,
+    /// The SIMD path of the row sums.
+    simd: Simd,
     unknowns: &'a mut [Unknown],
     /// The search direction `p`, by slot (read by neighbours in the push).
     direction: &'a mut [f32],
@@ -223,13 +226,12 @@ impl<P: Parallel> Solve<'_, P> {
     /// The push `u = Dᵀp` of the current direction into [`Self::push`]; returns `pᵀ(dt²A)p =
     /// dt² Σ|u|²`.
     fn push_direction(&mut self) -> f64 {
-        let (rows, state, stride, direction) =
-            (self.rows, self.state, self.stride, &*self.direction);
+        let (rows, state, simd, direction) = (self.rows, self.state, self.simd, &*self.direction);
         let sum = fold_slots(
             self.push,
             self.parallel,
             |slot, u| {
-                *u = pressure_push(rows, stride, state[slot], slot, direction);
+                *u = pressure_push(rows, simd, &state[slot], slot, direction);
                 u.length_squared() as f64
             },
             |a, b| a + b,
@@ -241,7 +243,7 @@ impl<P: Parallel> Solve<'_, P> {
     /// pushes of it, the errors by `step q` with `q = dt² D u`) and tallies the new state; the
     /// conjugation sum is against `q`.
     fn advance(&mut self, step: f32) -> Tally {
-        let (rows, state, stride) = (self.rows, self.state, self.stride);
+        let (rows, state, simd) = (self.rows, self.state, self.simd);
         let (push, direction) = (&*self.push, &*self.direction);
         let (dt, expansion) = (self.dt, self.expansion);
         fold_slots(
@@ -249,7 +251,7 @@ impl<P: Parallel> Solve<'_, P> {
             self.parallel,
             |slot, x| {
                 if step != 0.0 {
-                    let q = dt * dt * density_rate(rows, stride, state[slot], slot, push);
+                    let q = dt * dt * density_rate(rows, simd, &state[slot], slot, push);
                     let p = direction[slot];
                     if p != 0.0 {
                         let kappa = x.kappa - step * p;
@@ -270,7 +272,7 @@ impl<P: Parallel> Solve<'_, P> {
     /// Sets the errors from `velocity`, the velocities the unknowns start from, and tallies
     /// them.
     fn evaluate(&mut self, velocity: &[Vec2]) -> Tally {
-        let (rows, state, stride, dt) = (self.rows, self.state, self.stride, self.dt);
+        let (rows, state, simd, dt) = (self.rows, self.state, self.simd, self.dt);
         let (target, expansion) = (self.target, self.expansion);
         fold_slots(
             self.unknowns,
@@ -278,7 +280,7 @@ impl<P: Parallel> Solve<'_, P> {
             |slot, x| {
                 let s = state[slot];
                 if x.inverse_diagonal > 0.0 {
-                    let rate = density_rate(rows, stride, s, slot, velocity);
+                    let rate = density_rate(rows, simd, &s, slot, velocity);
                     x.error = target.error(dt, rate, &s);
                 }
                 tally(x, 0.0, expansion)
@@ -384,15 +386,10 @@ fn tally(x: &Unknown, q: f32, expansion: f32) -> Tally {
 
 /// `Σⱼ gᵢⱼ·(uᵢ − uⱼ) + 2 g_wall,ᵢ·uᵢ`: the density change rate (1/s) of particle `slot` under
 /// the velocity field `u` (walls mirror the particle's own velocity, [`WALL_MIRROR`]).
-#[inline]
-fn density_rate(rows: &[Neighbor], stride: usize, s: SlotState, slot: usize, u: &[Vec2]) -> f32 {
+#[inline(always)]
+fn density_rate(rows: &Rows, simd: Simd, s: &SlotState, slot: usize, u: &[Vec2]) -> f32 {
     let ui = u[slot];
-    // Four sums side by side: one would wait on each addition in turn.
-    let mut sums = Vec4::ZERO;
-    for quad in quads(rows, stride, slot, s.count) {
-        sums += Vec4::from_array(quad.map(|n| n.gradient.dot(ui - u[n.slot as usize])));
-    }
-    WALL_MIRROR * s.wall_gradient.dot(ui) + sum_quad(sums)
+    WALL_MIRROR * s.wall_gradient.dot(ui) + rows.row(slot, s.count).rate(simd, u, ui)
 }
 
 impl Dfsph {
@@ -449,7 +446,7 @@ impl Dfsph {
         let mut solve = Solve {
             rows: &self.rows,
             state: &self.state,
-            stride: self.stride,
+            simd: simd(),
             unknowns: &mut unknowns,
             direction: &mut direction,
             push: &mut push,
@@ -517,9 +514,9 @@ impl Dfsph {
     /// to the velocities (no bound: the tests' way to apply a stiffness field).
     #[cfg(test)]
     pub(super) fn push(&mut self, dt: f32, delta: &[f32], kappa: &mut [f32]) {
-        let (rows, state, stride) = (&self.rows, &self.state, self.stride);
+        let (rows, state, simd) = (&self.rows, &self.state, simd());
         for (slot, v) in self.velocity.iter_mut().enumerate() {
-            *v -= dt * pressure_push(rows, stride, state[slot], slot, delta);
+            *v -= dt * pressure_push(rows, simd, &state[slot], slot, delta);
         }
         for (k, d) in kappa.iter_mut().zip(delta) {
             *k += d;
