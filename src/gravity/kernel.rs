@@ -13,11 +13,9 @@
 //!   between vendors;
 //! - the same products are fused (`mul_add`, one rounding) on every FMA path.
 //!
-//! Other x86 CPUs (without AVX2 or FMA: before 2013, some AMD CPUs up to 2015, and some
-//! low-end Atoms, Celerons and Pentiums) take the baseline path, which rounds those products twice instead of calling a slow software
-//! `fmaf`: its results differ from the FMA paths' in the last bits, so a run there is
-//! reproducible on that kind of CPU (for any thread count), not bit for bit against an FMA
-//! CPU.
+//! Other x86 CPUs take the baseline path, which rounds those products twice (see the crate's
+//! shared SIMD rule in `src/simd.rs`): reproducible on that kind of CPU, not bit for bit against
+//! an FMA CPU.
 
 pub use crate::simd::simd_path;
 use crate::simd::{Simd, mul_add, simd};

@@ -278,10 +278,10 @@ impl<P: Parallel> Solve<'_, P> {
             self.unknowns,
             self.parallel,
             |slot, x| {
-                let s = state[slot];
+                let s = &state[slot];
                 if x.inverse_diagonal > 0.0 {
-                    let rate = density_rate(rows, simd, &s, slot, velocity);
-                    x.error = target.error(dt, rate, &s);
+                    let rate = density_rate(rows, simd, s, slot, velocity);
+                    x.error = target.error(dt, rate, s);
                 }
                 tally(x, 0.0, expansion)
             },
