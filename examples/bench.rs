@@ -24,11 +24,10 @@
 
 use bevy::prelude::*;
 use bevy::time::TimeUpdateStrategy;
-use bevy_sph2d::fluid::SCENARIO_TANK;
 use bevy_sph2d::fluid::SliceFluid;
-use bevy_sph2d::fluid::{
-    FluidBlock, PressureSolver, ScenarioKind, SphParams, SphScenario, SphSolver, Tank,
-};
+use bevy_sph2d::fluid::{PressureSolver, SphParams, SphSolver, Tank};
+use bevy_sph2d::gameplay::SCENARIO_TANK;
+use bevy_sph2d::gameplay::{FluidBlock, ScenarioKind, SphScenario};
 use bevy_sph2d::gravity::Multipole;
 use bevy_sph2d::prelude::*;
 use clap::error::ErrorKind;
@@ -190,13 +189,17 @@ fn main() {
         for _ in 0..WARM_UP {
             fluid.step();
         }
-        let before = fluid.iterations;
+        let before = fluid.iterations().total;
         let started = Instant::now();
         for _ in 0..steps {
             fluid.step();
         }
         let seconds = started.elapsed().as_secs_f64();
-        (seconds, fluid.mean_neighbors(), fluid.iterations - before)
+        (
+            seconds,
+            fluid.mean_neighbors(),
+            fluid.iterations().total - before,
+        )
     });
     drop(pool);
 

@@ -7,7 +7,7 @@
 //! `cargo run --example galaxy [-- BODIES]`
 
 use bevy::prelude::*;
-use bevy_sph2d::fluid::{ScenarioKind, SphScenario};
+use bevy_sph2d::gameplay::{ScenarioKind, SphScenario};
 use bevy_sph2d::gravity::GravityScenario;
 use bevy_sph2d::prelude::*;
 

@@ -12,9 +12,8 @@
 
 use bevy::prelude::*;
 use bevy::time::TimeUpdateStrategy;
-use bevy_sph2d::fluid::{
-    FluidBlock, PressureSolver, SphParams, SphSolver, Tank, refresh_fluid_state,
-};
+use bevy_sph2d::fluid::{PressureSolver, SphParams, SphSolver, Tank, refresh_fluid_state};
+use bevy_sph2d::gameplay::FluidBlock;
 use bevy_sph2d::gravity::GravityAcceleration;
 use bevy_sph2d::prelude::*;
 use clap::error::ErrorKind;

@@ -6,7 +6,7 @@
 //! `cargo run --example planet`
 
 use bevy::prelude::*;
-use bevy_sph2d::fluid::{ScenarioKind, SphScenario};
+use bevy_sph2d::gameplay::{ScenarioKind, SphScenario};
 use bevy_sph2d::prelude::*;
 
 fn main() {

@@ -9,7 +9,7 @@
 //! ```
 
 use bevy_sph2d::fluid::SphParams;
-use bevy_sph2d::fluid::validation::{DamBreakSettling, LayerReport, RestingLayer};
+use bevy_sph2d::validation::{DamBreakSettling, LayerReport, RestingLayer};
 use clap::{Parser, ValueEnum};
 
 /// Runs resting layers and prints how close each comes to hydrostatic.

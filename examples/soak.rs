@@ -15,9 +15,12 @@
 use bevy::prelude::*;
 use bevy::time::TimeUpdateStrategy;
 use bevy_sph2d::fluid::{
-    Acceleration, EmitterRate, FluidDrain, FluidEmitter, FluidParticle, FluidRegion, Obstacle,
-    Position, PressureSolver, ScenarioKind, SphParams, SphScenario, SphStats, SphSubstep,
-    SphSubstepSystems, load_fluid, save_fluid,
+    Acceleration, FluidParticle, Obstacle, Position, PressureSolver, SphParams, SphStats,
+    SphSubstep, SphSubstepSystems,
+};
+use bevy_sph2d::gameplay::{
+    EmitterRate, FluidDrain, FluidEmitter, FluidRegion, ScenarioKind, SphScenario, load_fluid,
+    save_fluid,
 };
 use bevy_sph2d::prelude::*;
 use clap::Parser;
@@ -82,7 +85,7 @@ fn main() {
     let cli = Cli::parse();
     let mut rng = StdRng::seed_from_u64(cli.seed);
     let scenario = SphScenario::new(ScenarioKind::Tank, cli.particles);
-    let tank = bevy_sph2d::fluid::SCENARIO_TANK;
+    let tank = bevy_sph2d::gameplay::SCENARIO_TANK;
     let base = SphParams {
         tank: Some(tank),
         particle_spacing: scenario.spacing(&tank),

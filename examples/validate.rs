@@ -5,8 +5,8 @@
 //! cargo run --release --no-default-features --example validate -- --out assets/validate.png
 //! ```
 
-use bevy_sph2d::fluid::validation::{MARTIN_MOYCE, MartinMoyce, compare};
 use bevy_sph2d::fluid::{PressureSolver, SphParams};
+use bevy_sph2d::validation::{MARTIN_MOYCE, MartinMoyce, compare};
 use clap::Parser;
 use plotters::prelude::*;
 use std::path::PathBuf;

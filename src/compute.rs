@@ -14,7 +14,8 @@ use bevy::tasks::ComputeTaskPool;
 ///
 /// The pool is sized from the `ComputeTaskPool` of the first app that uses it (one process, one
 /// pool). Without the `parallel` feature there is no pool: `work` runs on the calling thread,
-/// and so do the rayon calls inside it (see [`calling_thread`]).
+/// and so do the rayon calls inside it (see
+/// [`calling_thread`](crate::sim::parallel::calling_thread)).
 #[cfg(feature = "parallel")]
 pub fn region<R: Send>(work: impl FnOnce() -> R + Send) -> R {
     static POOL: std::sync::OnceLock<rayon::ThreadPool> = std::sync::OnceLock::new();
@@ -31,40 +32,7 @@ pub fn region<R: Send>(work: impl FnOnce() -> R + Send) -> R {
 /// Runs `work` as one region on the calling thread (the build without the `parallel` feature).
 #[cfg(not(feature = "parallel"))]
 pub fn region<R: Send>(work: impl FnOnce() -> R + Send) -> R {
-    calling_thread(work)
-}
-
-/// Runs `work` on the calling thread, rayon calls inside it included: the calling thread becomes
-/// the one thread of a rayon pool of its own (rayon's `use_current_thread`), so nothing is ever
-/// spawned and every parallel iterator runs in order on it. Inside a rayon pool already (a
-/// caller's own), `work` runs on that pool. This is what the crate does everywhere without the
-/// `parallel` feature, for targets without threads.
-pub fn calling_thread<R: Send>(work: impl FnOnce() -> R + Send) -> R {
-    thread_local! {
-        static POOL: Option<rayon::ThreadPool> = rayon::ThreadPoolBuilder::new()
-            .num_threads(1)
-            .use_current_thread()
-            .build()
-            .ok();
-    }
-    if rayon::current_thread_index().is_some() {
-        return work();
-    }
-    POOL.with(|pool| match pool {
-        Some(pool) => pool.install(work),
-        None => work(),
-    })
-}
-
-/// Runs `work` where a caller's own rayon work runs: on the current rayon pool with the
-/// `parallel` feature, on the calling thread without ([`calling_thread`]). The slice driver's
-/// passes use it.
-pub fn current<R: Send>(work: impl FnOnce() -> R + Send) -> R {
-    if cfg!(feature = "parallel") {
-        work()
-    } else {
-        calling_thread(work)
-    }
+    crate::sim::parallel::calling_thread(work)
 }
 
 /// How many threads a [`region`] runs on: Bevy's compute threads, one without the `parallel`

@@ -50,7 +50,7 @@ impl SimulationControl {
 }
 
 /// Asks the simulations to start again from their scenario (the fluid respawns its
-/// [`SphScenario`](crate::fluid::SphScenario)).
+/// [`SphScenario`](crate::gameplay::SphScenario)).
 #[derive(Message, Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct ResetSimulation;
 

@@ -2,7 +2,8 @@
 //! test): a scenario in a tank, sprites, mouse tools and the panel. See [`SphDemoPlugin`].
 
 use crate::control::ResetSimulation;
-use crate::fluid::{ScenarioKind, SphParams, SphPlugin, SphScenario};
+use crate::fluid::{SphParams, SphPlugin};
+use crate::gameplay::{ScenarioKind, SphScenario};
 use crate::render::{ParticleCamera, ParticleDraw, ParticleView, RenderMode};
 use crate::{ParticlePlugins, ParticleUiPlugins};
 use bevy::prelude::*;
@@ -54,7 +55,7 @@ pub fn window_plugins(title: &str) -> impl PluginGroup {
 ///   dropping frames (the panel shows the speed relative to real time).
 pub fn demo_params() -> SphParams {
     SphParams {
-        tank: Some(crate::fluid::SCENARIO_TANK),
+        tank: Some(crate::gameplay::SCENARIO_TANK),
         speed_of_sound: 30.0,
         max_substeps: 40,
         ..SphParams::water()

@@ -28,9 +28,9 @@
 //! - [`ParticlePlugins`]: the simulation plugins, as a group (headless-safe), in one schedule
 //!   under crate-wide sets ([`ParticleSystems`], [`SphSubstepSystems`]) that every plugin
 //!   nests under.
-//! - Emitters, drains, sensors and the point probe ([`fluid::FluidEmitter`],
-//!   [`fluid::FluidDrain`], [`fluid::FluidSensor`], [`fluid::probe`]), save and restore
-//!   ([`fluid::save_fluid`], [`fluid::load_fluid`]).
+//! - [`gameplay`]: emitters, drains, sensors and the point probe ([`gameplay::FluidEmitter`],
+//!   [`gameplay::FluidDrain`], [`gameplay::FluidSensor`], [`gameplay::probe`]), spawners,
+//!   scenarios, save and restore ([`gameplay::save_fluid`], [`gameplay::load_fluid`]).
 //! - `ParticleUiPlugins` (features `render`, `egui`, on by default): a liquid view or sprites
 //!   tinted through a colour map (`render::ParticleRenderPlugin`), mouse and keyboard tools
 //!   (`interact::ParticleInteractPlugin`) and the egui tweak panel (`panel::ParticlePanelPlugin`);
@@ -54,14 +54,19 @@
 //! spawned (rayon's parallel iterators run in order on it), for targets without threads such as
 //! the web; the results are the threaded build's bit for bit (CI compares them). A build
 //! without a file system gives the save slot a storage of its own
-//! ([`fluid::SnapshotStorage`]).
+//! ([`gameplay::SnapshotStorage`]).
 //!
-//! The pure algorithms have no ECS in them and can be used on their own: the smoothing kernels
+//! Every algorithm lives in a pure simulation core (private module `sim`: no ECS, nothing from
+//! the rest of the crate, checked by CI) that writes the order of a fluid sub-step once; the
+//! plugins are thin drivers of it. Its parts can be used on their own: the smoothing kernels
 //! ([`fluid::kernels`]), the cell-list neighbour search ([`fluid::NeighborGrid`]), the whole
-//! fluid solver on plain vectors ([`fluid::SliceFluid`]) and the quadtree
-//! ([`gravity::QuadTree`]).
+//! fluid on plain vectors ([`fluid::SliceFluid`], the core's second driver) and the quadtree
+//! ([`gravity::QuadTree`]); [`validation`] holds the Martin & Moyce data and the resting-layer
+//! checks run on it.
 
 #![warn(missing_docs)]
+// Unsafe code only in the SIMD sums of the core (each block with its SAFETY note), which allow it.
+#![deny(unsafe_code)]
 
 mod body;
 mod compute;
@@ -69,6 +74,7 @@ mod control;
 #[cfg(feature = "egui")]
 pub mod demo;
 pub mod fluid;
+pub mod gameplay;
 pub mod gravity;
 #[cfg(feature = "render")]
 pub mod interact;
@@ -78,7 +84,8 @@ mod params;
 #[cfg(feature = "render")]
 pub mod render;
 mod schedule;
-mod simd;
+mod sim;
+pub mod validation;
 
 pub use body::{Position, Velocity};
 pub use control::{
@@ -90,7 +97,7 @@ pub use schedule::{
     BodyForceSystems, ParticleSchedule, ParticleSchedulePlugin, ParticleSystems, SphSubstep,
     SphSubstepSystems,
 };
-pub use simd::simd_path;
+pub use sim::simd::simd_path;
 
 use bevy::app::{
     PluginGroup, PluginGroupBuilder, TaskPoolOptions, TaskPoolPlugin,
@@ -207,10 +214,12 @@ pub mod prelude {
     pub use crate::body::{Position, Velocity};
     pub use crate::control::{ResetSimulation, SimulationControl};
     pub use crate::fluid::{
-        Acceleration, Density, EmitterRate, FluidBlock, FluidDrain, FluidEmitter, FluidEntered,
-        FluidLeft, FluidParticle, FluidRegion, FluidSensor, KernelKind, Obstacle, Pressure,
-        ScenarioKind, SphParams, SphParamsStatus, SphPlugin, SphScenario, SphStats, SphSystems,
-        Tank,
+        Acceleration, Density, FluidParticle, KernelKind, Obstacle, Pressure, SphParams,
+        SphParamsStatus, SphPlugin, SphStats, SphSystems, Tank,
+    };
+    pub use crate::gameplay::{
+        EmitterRate, FluidBlock, FluidDrain, FluidEmitter, FluidEntered, FluidLeft, FluidRegion,
+        FluidSensor, ScenarioKind, SphScenario,
     };
     pub use crate::gravity::{
         FluidPlanets, GalaxyDisc, GravityAcceleration, GravityParams, GravityPlugin, GravityStats,

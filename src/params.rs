@@ -88,7 +88,8 @@ pub(crate) fn apply_params<P: Params>(
 
 /// One numeric field of a parameters type `P` as validation and the panel see it: its name,
 /// label and unit, the values validation accepts, and the range and scale of the panel's
-/// slider. A new numeric field is one row of [`ParamTable::FIELDS`].
+/// slider. A new numeric field is one row of [`ParamTable::FIELDS`]; the panel draws a row by
+/// reference (`&SphParams::REST_DENSITY`), so a row it names always exists.
 #[derive(Debug)]
 pub struct ParamField<P: 'static> {
     /// The field's path, as errors name it.
@@ -105,6 +106,9 @@ pub struct ParamField<P: 'static> {
     pub slider: (f32, f32),
     /// A logarithmic slider.
     pub logarithmic: bool,
+    /// What `valid` and `slider` are in units of, for a field whose range depends on others
+    /// (the background pressure in units of the Tait stiffness); `None`: absolute.
+    pub scale: Option<fn(&P) -> f32>,
     /// Reads the field.
     pub get: fn(&P) -> f32,
     /// Writes the field.
@@ -127,11 +131,6 @@ pub trait ParamTable: Sized + 'static {
     /// on others, vectors, counts and switches are checked by the type's `validate` itself).
     const FIELDS: &'static [ParamField<Self>];
 
-    /// The row of `field`.
-    fn field(field: &str) -> Option<&'static ParamField<Self>> {
-        Self::FIELDS.iter().find(|row| row.field == field)
-    }
-
     /// Checks every row of the table; the first problem is returned.
     fn check_fields(&self) -> Result<(), ParamsError> {
         Self::FIELDS.iter().try_for_each(|row| row.check(self))
@@ -139,10 +138,30 @@ pub trait ParamTable: Sized + 'static {
 }
 
 impl<P: ParamTable> ParamField<P> {
+    /// The accepted values for `params`, inclusive.
+    pub fn valid_range(&self, params: &P) -> (f32, f32) {
+        self.scaled(self.valid, params)
+    }
+
+    /// The panel slider's range for `params`.
+    pub fn slider_range(&self, params: &P) -> (f32, f32) {
+        self.scaled(self.slider, params)
+    }
+
+    fn scaled(&self, (min, max): (f32, f32), params: &P) -> (f32, f32) {
+        match self.scale {
+            Some(scale) => {
+                let unit = scale(params);
+                (min * unit, max * unit)
+            }
+            None => (min, max),
+        }
+    }
+
     /// Whether `params` has an accepted value here; the error names the value and the range.
     pub fn check(&self, params: &P) -> Result<(), ParamsError> {
         let value = (self.get)(params);
-        let (min, max) = self.valid;
+        let (min, max) = self.valid_range(params);
         let ok = value.is_finite()
             && value <= max
             && if self.positive {
@@ -196,10 +215,11 @@ fn spaced(unit: &str) -> String {
 }
 
 /// A [`ParamField`] row for the field at `$path` (`rest_density`, `dfsph.cfl_number`): its
-/// name, getter and setter come from the path.
+/// name, getter and setter come from the path; `scale: f` after the rest makes the ranges
+/// relative to `f(params)`.
 macro_rules! param_field {
     ($($path:ident).+, $label:expr, $unit:expr, $valid:expr, $positive:expr, $slider:expr,
-     $log:expr) => {
+     $log:expr $(, scale: $scale:expr)?) => {
         $crate::params::ParamField {
             field: stringify!($($path).+),
             label: $label,
@@ -208,9 +228,12 @@ macro_rules! param_field {
             positive: $positive,
             slider: $slider,
             logarithmic: $log,
+            scale: $crate::params::param_field!(@scale $($scale)?),
             get: |p| p.$($path).+,
             set: |p, v| p.$($path).+ = v,
         }
     };
+    (@scale) => { None };
+    (@scale $scale:expr) => { Some($scale) };
 }
 pub(crate) use param_field;

@@ -18,7 +18,8 @@ use bevy::winit::WinitPlugin;
 use bevy_sph2d::SphSubstep;
 use bevy_sph2d::demo::SphDemoPlugin;
 use bevy_sph2d::fluid::SphParams;
-use bevy_sph2d::fluid::{FluidParticle, Position, ScenarioKind, SphScenario, SphStats};
+use bevy_sph2d::fluid::{FluidParticle, Position, SphStats};
+use bevy_sph2d::gameplay::{ScenarioKind, SphScenario};
 use bevy_sph2d::interact::PointerSettings;
 use bevy_sph2d::render::{ParticleCamera, ParticleDraw, ParticleView};
 use std::process::Command;
@@ -166,7 +167,10 @@ fn xdotool(args: &[String]) -> bool {
     command.status().map(|s| s.success()).unwrap_or(false)
 }
 
-#[allow(clippy::too_many_arguments)]
+#[expect(
+    clippy::too_many_arguments,
+    reason = "a Bevy system: one parameter per resource and query it reads"
+)]
 fn script(
     mut script: ResMut<Script>,
     time: Res<Time<Real>>,

@@ -1,8 +1,10 @@
-//! Components of a fluid particle. See [`SphPlugin`](crate::fluid::SphPlugin).
+//! Components of a fluid particle, and the [`Obstacle`] component. See
+//! [`SphPlugin`](crate::fluid::SphPlugin).
 //!
 //! Spawning [`FluidParticle`] with a [`Position`] is enough: the marker requires the rest, and the
 //! solver fills in density, pressure and acceleration at the next step.
 
+use crate::sim::boundary::Shape;
 use bevy::prelude::*;
 
 /// Marks an entity as an SPH fluid particle. Its required components carry the state the solver
@@ -25,15 +27,18 @@ use bevy::prelude::*;
     Density,
     Pressure,
     Stiffness,
-    NeighborSlot
+    FluidIndex
 )]
 pub struct FluidParticle;
 
 pub use crate::body::{Position, Velocity};
 
-/// Acceleration of the last sub-step, m/s²: pressure, viscosity and gravity as computed in
-/// [`SphSubstepSystems::Forces`](crate::fluid::SphSubstepSystems::Forces), plus whatever a game's
-/// own systems add in that set before [`SphSubstepSystems::Integrate`](crate::fluid::SphSubstepSystems::Integrate) consumes it.
+/// Acceleration of the last sub-step, m/s²: what
+/// [`SphSubstepSystems::Forces`](crate::fluid::SphSubstepSystems::Forces) computes (WCSPH:
+/// pressure, viscosity and gravity; DFSPH: viscosity and gravity, the pressure following in the
+/// density solve), plus what systems in `FieldForces`, `PointerForces` and `ExternalForces` add
+/// with `+=` before [`SphSubstepSystems::Integrate`](crate::fluid::SphSubstepSystems::Integrate)
+/// consumes it.
 #[derive(Component, Reflect, Debug, Clone, Copy, Default, Deref, DerefMut, PartialEq)]
 #[reflect(Component, Default, Debug, PartialEq)]
 pub struct Acceleration(pub Vec2);
@@ -43,7 +48,8 @@ pub struct Acceleration(pub Vec2);
 #[reflect(Component, Default, Debug, PartialEq)]
 pub struct Density(pub f32);
 
-/// Gauge pressure from the equation of state, Pa (zero at the free surface, never negative).
+/// Gauge pressure, Pa (zero at the free surface, never negative): under DFSPH `ρ₀κ`, the density
+/// solve's; under WCSPH the equation of state's.
 #[derive(Component, Reflect, Debug, Clone, Copy, Default, Deref, DerefMut, PartialEq)]
 #[reflect(Component, Default, Debug, PartialEq)]
 pub struct Pressure(pub f32);
@@ -55,24 +61,46 @@ pub struct Pressure(pub f32);
 #[reflect(Component, Default, Debug, PartialEq)]
 pub(crate) struct Stiffness(pub Vec2);
 
-/// Where the particle sits in the solver's cell-sorted neighbour snapshot, and in which
-/// snapshot: written by [`SphSubstepSystems::Neighbors`](crate::fluid::SphSubstepSystems::Neighbors)
-/// each sub-step, so a slot is only trusted in the snapshot generation it was given in.
-/// Games can ignore it.
+/// Where the particle sits in the solver's gathered particles, and in which gathering: written
+/// by [`SphSubstepSystems::Neighbors`](crate::fluid::SphSubstepSystems::Neighbors) when a game's
+/// systems run between the stages, so an index is only trusted in the generation it was given
+/// in (a particle spawned since has none). Games can ignore it.
 #[derive(Component, Reflect, Debug, Clone, Copy, PartialEq, Eq)]
 #[reflect(Component, Default, Debug, PartialEq)]
-pub(crate) struct NeighborSlot {
-    /// Sorted slot in the snapshot.
-    pub slot: u32,
-    /// The snapshot generation the slot belongs to (0: none yet).
+pub(crate) struct FluidIndex {
+    /// Index in the gathered particles.
+    pub index: u32,
+    /// The gathering the index belongs to (0: none yet).
     pub generation: u32,
 }
 
-impl Default for NeighborSlot {
+impl Default for FluidIndex {
     fn default() -> Self {
         Self {
-            slot: u32::MAX,
+            index: u32::MAX,
             generation: 0,
         }
+    }
+}
+
+/// A static solid obstacle inside the fluid. Spawn it as a component on any entity; the solver
+/// re-samples its boundary particles whenever obstacles are added, changed or removed.
+///
+/// Give obstacles a radius of at least one kernel support radius where possible: thinner ones
+/// cannot hold a full layer of boundary particles, so fluid near them sees a little less density
+/// (the collision projection still keeps it out).
+#[derive(Component, Reflect, Debug, Clone, Copy, Deref, DerefMut, PartialEq)]
+#[reflect(Component, Debug, PartialEq)]
+pub struct Obstacle(pub Shape);
+
+impl Obstacle {
+    /// A disc of `radius` (m) around `center`.
+    pub const fn circle(center: Vec2, radius: f32) -> Self {
+        Self(Shape::circle(center, radius))
+    }
+
+    /// A capsule of half thickness `radius` (m) around the segment from `start` to `end`.
+    pub const fn segment(start: Vec2, end: Vec2, radius: f32) -> Self {
+        Self(Shape::segment(start, end, radius))
     }
 }

@@ -1,74 +1,61 @@
 //! The SPH fluid plugin. See [`SphPlugin`].
 
-mod boundary;
-mod clock;
 mod components;
-mod dfsph;
-mod grid;
-pub mod kernels;
-mod layout;
-#[doc(hidden)]
-pub mod parallel;
+mod driver;
 mod params;
-mod region;
-mod save;
-mod scenario;
-mod sensors;
-mod slices;
-mod solver;
-mod sources;
-mod spawn;
-mod systems;
-pub mod validation;
-mod wcsph;
+mod prepare;
+mod resources;
+mod stats;
 
 use bevy::ecs::intern::Interned;
 use bevy::ecs::schedule::{ScheduleLabel, SingleThreadedExecutor};
 use bevy::prelude::*;
 
 use crate::control::simulation_running;
+use crate::gameplay::FluidGameplayPlugin;
 use crate::schedule::{ParticleSchedulePlugin, ParticleSystems};
 
 pub use crate::schedule::{SphSubstep, SphSubstepSystems};
-pub use boundary::{Obstacle, Tank};
-pub use clock::SubstepClock;
-pub use components::{Acceleration, Density, FluidParticle, Position, Pressure, Velocity};
-pub(crate) use components::{NeighborSlot, Stiffness};
-pub use dfsph::{DfsphReport, LARGEST_ERROR_RATIO, MAX_RELIEF_RATE, PRESSURE_ACCURACY};
-pub use grid::NeighborGrid;
-pub use kernels::KernelKind;
-pub use params::{DfsphSettings, PressureSolver, SphParams, SphParamsError};
-pub use region::FluidRegion;
-pub use save::{
-    FileStorage, LoadSlot, SaveSlot, SnapshotError, SnapshotSlot, SnapshotStorage, load_fluid,
-    load_fluid_from, save_fluid, save_fluid_to,
+pub use crate::sim::boundary::{Shape, Tank};
+pub use crate::sim::clock::SubstepClock;
+pub use crate::sim::config::{DfsphSettings, PressureSolver, SphConstants};
+pub use crate::sim::dfsph::{DfsphReport, LARGEST_ERROR_RATIO, MAX_RELIEF_RATE, PRESSURE_ACCURACY};
+pub use crate::sim::grid::NeighborGrid;
+pub use crate::sim::kernels::{self, KernelKind};
+#[doc(hidden)]
+pub use crate::sim::parallel;
+pub use crate::sim::step::{Particles, SolverIterations};
+pub use crate::sim::world::SliceFluid;
+pub use components::{
+    Acceleration, Density, FluidParticle, Obstacle, Position, Pressure, Velocity,
 };
-pub use scenario::{SCENARIO_TANK, ScenarioKind, SphScenario};
-pub use sensors::{
-    FluidEntered, FluidLeft, FluidSample, FluidSensor, SensorReading, probe, wall_pressure,
-};
-pub use slices::SliceFluid;
-pub use solver::SphConstants;
-pub use sources::{EmitterRate, FluidDrain, FluidEmitter};
-pub use spawn::FluidBlock;
-pub use systems::{SolverIterations, SphParamsStatus, SphSolver, SphStats, refresh_fluid_state};
+pub(crate) use components::{FluidIndex, Stiffness};
+pub(crate) use driver::SubstepHooks;
+pub use driver::refresh_fluid_state;
+pub(crate) use params::STANDARD_GRAVITY;
+pub use params::{SphParams, SphParamsError};
+pub use resources::{SphParamsStatus, SphSolver, SphStats};
+pub(crate) use stats::update_stats;
 
 /// SPH fluid, simulated in a fixed-step schedule ([`FixedUpdate`] by default) with a stable
 /// number of sub-steps per tick, incompressible through the divergence-free solver (DFSPH, the
-/// default) or weakly compressible (WCSPH); see [`PressureSolver`].
+/// default) or weakly compressible (WCSPH); see [`PressureSolver`]. It drives the crate's pure
+/// simulation core, whose one sub-step order the plain-vector [`SliceFluid`] drives too.
 ///
-/// Spawn [`FluidParticle`]s (or queue a [`FluidBlock`]) and tune [`SphParams`]; read
-/// [`SphStats`]. Add [`Obstacle`] components for solids inside the tank.
+/// Spawn [`FluidParticle`]s (or queue a [`FluidBlock`](crate::gameplay::FluidBlock)) and tune
+/// [`SphParams`]; read [`SphStats`]. Add [`Obstacle`] components for solids inside the tank.
+/// It adds the [`FluidGameplayPlugin`] (emitters, drains, sensors, scenarios, save and restore).
 ///
 /// # Schedule
 /// In the plugin's schedule, in order ([`SphSystems`]):
-/// 1. [`SphSystems::Prepare`]: respawn the [`SphScenario`] on
+/// 1. [`SphSystems::Prepare`]: respawn the [`SphScenario`](crate::gameplay::SphScenario) on
 ///    [`ResetSimulation`](crate::control::ResetSimulation), validate changed [`SphParams`],
 ///    remove particles whose state is not finite or that a game put outside the tank (the
 ///    stability guard, counted in [`SphStats`]), re-sample walls and obstacles.
 /// 2. [`SphSystems::Simulate`] (skipped while
-///    [`SimulationControl`](crate::control::SimulationControl) pauses): split the tick into stable sub-steps and run the [`SphSubstep`]
-///    schedule once per sub-step. In it, in order ([`SphSubstepSystems`]):
+///    [`SimulationControl`](crate::control::SimulationControl) pauses): split the tick into
+///    stable sub-steps, each with the stages below ([`SphSubstepSystems`], in the
+///    [`SphSubstep`] schedule):
 ///    1. [`SphSubstepSystems::Neighbors`]: rebuild the cell grid and the sorted snapshot.
 ///    2. [`SphSubstepSystems::Density`]: WCSPH: density and pressure with each particle's
 ///       neighbour list, wall pressure. DFSPH: neighbour lists with cached kernel gradients,
@@ -84,16 +71,21 @@ pub use systems::{SolverIterations, SphParamsStatus, SphSolver, SphStats, refres
 ///    6. [`SphSubstepSystems::Integrate`]: choose the step; DFSPH solves for the pressure that
 ///       keeps the density at rest under all the accelerations above; advance, keep particles
 ///       in the tank and out of obstacles.
-/// 3. [`SphSystems::Finish`]: [`FluidEmitter`]s pour, [`FluidDrain`]s remove, [`FluidSensor`]s
-///    measure (and send [`FluidEntered`] and [`FluidLeft`]), then fill [`SphStats`].
 ///
-/// The grid rebuild and the passes over neighbours run by sorted slot in parallel regions on the
-/// crate's pool (as many threads as Bevy's
-/// `ComputeTaskPool`, whose own threads would sleep between passes); the light passes over
-/// components (`par_iter_mut` from 8,192 particles) use the `ComputeTaskPool`. On machines with
-/// few cores
-/// Bevy's default pool sizes leave one compute thread; set `TaskPoolPlugin`'s options to use
-/// them all.
+///    While no system besides the fluid's own stages has work in [`SphSubstep`], the tick runs
+///    without it: the components are copied into the solver once, every sub-step runs on the
+///    copy, and the results are copied back once. A system of yours in [`SphSubstep`] (or the
+///    gravity plugin's while fluid particles have a mass, or the mouse tools' while one
+///    pushes or pulls) makes every sub-step run the schedule, with the components current
+///    between the stages.
+/// 3. [`SphSystems::Finish`]: the gameplay components act ([`FluidGameplayPlugin`]), then
+///    [`SphStats`] is filled.
+///
+/// The grid rebuild and the passes over particles run by sorted slot in parallel regions on the
+/// crate's rayon pool (as many threads as Bevy's `ComputeTaskPool`, whose own threads would
+/// sleep between passes), from 1,024 particles on. On machines with few
+/// cores Bevy's default pool sizes leave one compute thread; set `TaskPoolPlugin`'s options (or
+/// use [`task_pool_plugin`](crate::task_pool_plugin)) to use them all.
 pub struct SphPlugin {
     /// The schedule the fluid steps in when it is the first of the crate's plugins added (it
     /// then adds [`ParticleSchedulePlugin`] with it); otherwise the schedule already owned.
@@ -158,7 +150,6 @@ impl Plugin for SphPlugin {
         }
         let schedule = ParticleSchedulePlugin::ensure(app, self.schedule);
         app.register_type::<SphParams>()
-            .register_type::<SphScenario>()
             .register_type::<SphStats>()
             .register_type::<FluidParticle>()
             .register_type::<Position>()
@@ -167,19 +158,12 @@ impl Plugin for SphPlugin {
             .register_type::<Density>()
             .register_type::<Pressure>()
             .register_type::<Stiffness>()
-            .register_type::<NeighborSlot>()
+            .register_type::<FluidIndex>()
             .register_type::<Obstacle>()
-            .register_type::<FluidEmitter>()
-            .register_type::<FluidDrain>()
-            .register_type::<FluidSensor>()
-            .add_message::<FluidEntered>()
-            .add_message::<FluidLeft>()
             .insert_resource(self.params.clone())
             .init_resource::<SphSolver>()
             .init_resource::<SphStats>()
-            .init_resource::<SphParamsStatus>()
-            .init_resource::<SnapshotSlot>();
-
+            .init_resource::<SphParamsStatus>();
         // Edited rather than replaced: other plugins (gravity) may have added systems to it.
         app.init_schedule(SphSubstep);
         app.edit_schedule(SphSubstep, |substep| {
@@ -196,39 +180,8 @@ impl Plugin for SphPlugin {
                 )
                     .chain(),
             );
-            let wcsph = systems::uses_solver(PressureSolver::Wcsph);
-            let dfsph = systems::uses_solver(PressureSolver::Dfsph);
-            // The solvers' systems exclude each other by run condition; chaining them makes
-            // that order explicit to the scheduler (WCSPH's, then DFSPH's, in each stage).
-            substep.add_systems((
-                systems::build_neighbor_grid.in_set(SphSubstepSystems::Neighbors),
-                (
-                    systems::compute_density.run_if(wcsph.clone()),
-                    (systems::prepare_dfsph, systems::solve_divergence)
-                        .chain()
-                        .run_if(dfsph.clone()),
-                )
-                    .chain()
-                    .in_set(SphSubstepSystems::Density),
-                (
-                    systems::compute_forces.run_if(wcsph.clone()),
-                    systems::compute_dfsph_forces.run_if(dfsph.clone()),
-                )
-                    .chain()
-                    .in_set(SphSubstepSystems::Forces),
-                (
-                    (systems::choose_time_step, systems::integrate_particles)
-                        .chain()
-                        .run_if(wcsph),
-                    (systems::solve_density, systems::integrate_dfsph)
-                        .chain()
-                        .run_if(dfsph),
-                )
-                    .chain()
-                    .in_set(SphSubstepSystems::Integrate),
-            ));
+            driver::add_stage_systems(substep);
         });
-
         app.configure_sets(
             schedule,
             (
@@ -241,25 +194,20 @@ impl Plugin for SphPlugin {
             schedule,
             (
                 (
-                    scenario::reset_scenario,
                     crate::params::apply_params::<SphParams>,
-                    systems::guard_particles,
-                    systems::rebuild_walls,
+                    prepare::guard_particles,
+                    prepare::rebuild_walls,
                 )
                     .chain()
                     .in_set(SphSystems::Prepare),
-                systems::run_substeps
+                driver::run_substeps
                     .run_if(simulation_running)
                     .in_set(SphSystems::Simulate),
-                (
-                    sources::run_emitters,
-                    sources::run_drains,
-                    sensors::run_sensors,
-                    systems::update_stats,
-                )
-                    .chain()
-                    .in_set(SphSystems::Finish),
+                stats::update_stats.in_set(SphSystems::Finish),
             ),
         );
+        if !app.is_plugin_added::<FluidGameplayPlugin>() {
+            app.add_plugins(FluidGameplayPlugin);
+        }
     }
 }

@@ -1,10 +1,10 @@
 //! Runtime-tunable fluid parameters in SI units, and their validation. See
 //! [`SphPlugin`](crate::fluid::SphPlugin).
 
-use super::boundary::Tank;
-use super::kernels::{self, KernelKind};
-use super::solver::SphConstants;
 use crate::params::{ParamField, ParamTable, param_field};
+use crate::sim::boundary::Tank;
+use crate::sim::config::{DfsphSettings, PressureSolver, SphConstants};
+use crate::sim::kernels::{self, KernelKind};
 use bevy::prelude::*;
 
 /// Standard gravity, m/s².
@@ -69,78 +69,6 @@ pub struct SphParams {
     pub dfsph: DfsphSettings,
 }
 
-/// The pressure solver.
-#[derive(Reflect, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
-pub enum PressureSolver {
-    /// Weakly compressible SPH with the Tait equation of state: explicit, stepped at the acoustic
-    /// CFL limit (`C h / c₀`, a tenth of a millisecond at centimetre spacing). The reference, and
-    /// the solver for gases ([`SphParams::gas`]) and anything else that needs an equation of
-    /// state.
-    Wcsph,
-    /// Divergence-free SPH (Bender & Koschier 2015, 2017): an implicit incompressible solver
-    /// whose time step follows the flow's CFL (`C Δx / v_max`, milliseconds), not the speed of
-    /// sound. The default. See [`DfsphSettings`].
-    #[default]
-    Dfsph,
-}
-
-impl PressureSolver {
-    /// Every choice, for menus.
-    pub const ALL: [PressureSolver; 2] = [Self::Wcsph, Self::Dfsph];
-
-    /// A short human-readable name.
-    pub fn label(self) -> &'static str {
-        match self {
-            Self::Dfsph => "DFSPH",
-            Self::Wcsph => "WCSPH",
-        }
-    }
-}
-
-/// Settings of the divergence-free solver ([`PressureSolver::Dfsph`]).
-///
-/// Each sub-step makes the velocity field divergence-free (a pressure solve to
-/// `divergence_tolerance`), adds gravity, viscosity and external forces, then solves for the
-/// pressure that brings the predicted density back to rest (to `density_tolerance`), and moves
-/// the particles. Both solves start from the last sub-step's pressures (`warm_start`). The
-/// README's "The incompressible solver" section lists where it differs from the paper.
-#[derive(Reflect, Debug, Clone, Copy, PartialEq)]
-#[reflect(Default, Debug, PartialEq)]
-pub struct DfsphSettings {
-    /// Courant number `C` of the flow's time-step limit `dt = C Δx / v_max`, 0.05–1 (the default
-    /// 0.7: no particle moves more than 0.7 spacings per step; the dam-break tests pass with it,
-    /// and it takes a sixth fewer sub-steps than 0.6).
-    pub cfl_number: f32,
-    /// Longest sub-step, s (the limit when the fluid is at rest).
-    pub max_time_step: f32,
-    /// Mean predicted density error `|ρ − ρ₀|/ρ₀` the density solve stops at, as a fraction
-    /// (0.0001 = 0.01%).
-    pub density_tolerance: f32,
-    /// Mean density change over one step `dt (Dρ/Dt)/ρ₀` the divergence solve stops at, as a
-    /// fraction (0.01 = 1%).
-    pub divergence_tolerance: f32,
-    /// Most iterations of the density solve per sub-step.
-    pub max_density_iterations: u32,
-    /// Most iterations of the divergence solve per sub-step (0 switches it off).
-    pub max_divergence_iterations: u32,
-    /// Start each solve from the last sub-step's pressures.
-    pub warm_start: bool,
-}
-
-impl Default for DfsphSettings {
-    fn default() -> Self {
-        Self {
-            cfl_number: 0.7,
-            max_time_step: 0.005,
-            density_tolerance: 0.0001,
-            divergence_tolerance: 0.01,
-            max_density_iterations: 300,
-            max_divergence_iterations: 100,
-            warm_start: true,
-        }
-    }
-}
-
 impl Default for SphParams {
     fn default() -> Self {
         Self::water()
@@ -150,26 +78,63 @@ impl Default for SphParams {
 /// Why a [`SphParams`] value was refused (the crate's one [`ParamsError`](crate::params::ParamsError)).
 pub type SphParamsError = crate::params::ParamsError;
 
+/// The rows of [`SphParams`]'s table, by name: the panel draws each by reference.
+#[rustfmt::skip]
+impl SphParams {
+    // path, label, unit, accepted range, zero excluded, slider range, logarithmic
+    /// [`rest_density`](Self::rest_density).
+    pub const REST_DENSITY: ParamField<Self> = param_field!(rest_density, "rest density ρ₀", "kg/m³", (0.0, 1.0e5), true, (0.5, 5000.0), true);
+    /// [`speed_of_sound`](Self::speed_of_sound).
+    pub const SPEED_OF_SOUND: ParamField<Self> = param_field!(speed_of_sound, "speed of sound c₀", "m/s", (0.0, 1.0e4), true, (1.0, 300.0), true);
+    /// [`eos_exponent`](Self::eos_exponent).
+    pub const EOS_EXPONENT: ParamField<Self> = param_field!(eos_exponent, "EOS exponent γ", "", (1.0, 10.0), false, (1.0, 10.0), false);
+    /// [`background_pressure`](Self::background_pressure), in units of the Tait stiffness.
+    pub const BACKGROUND_PRESSURE: ParamField<Self> = param_field!(background_pressure, "background pressure", "Pa", (0.0, 10.0), false, (0.0, 10.0), false, scale: |p| p.tait_stiffness());
+    /// [`kinematic_viscosity`](Self::kinematic_viscosity).
+    pub const KINEMATIC_VISCOSITY: ParamField<Self> = param_field!(kinematic_viscosity, "kinematic viscosity ν", "m²/s", (0.0, 100.0), false, (0.0, 1.0e-2), true);
+    /// [`artificial_viscosity`](Self::artificial_viscosity).
+    pub const ARTIFICIAL_VISCOSITY: ParamField<Self> = param_field!(artificial_viscosity, "artificial viscosity α", "", (0.0, 10.0), false, (0.0, 1.0), false);
+    /// [`support_ratio`](Self::support_ratio).
+    pub const SUPPORT_RATIO: ParamField<Self> = param_field!(support_ratio, "support H/Δx", "spacings", (1.5, 5.0), false, (1.5, 5.0), false);
+    /// The x part of [`gravity`](Self::gravity), for the panel: not in the table's
+    /// [`FIELDS`](ParamTable::FIELDS), because [`validate`](Self::validate) checks the vector
+    /// whole (finite, at most 1e4 m/s² long, which keeps each part in this row's range).
+    pub const GRAVITY_X: ParamField<Self> = param_field!(gravity.x, "gravity x", "m/s²", (-1.0e4, 1.0e4), false, (-30.0, 30.0), false);
+    /// The y part of [`gravity`](Self::gravity), for the panel, as [`GRAVITY_X`](Self::GRAVITY_X).
+    pub const GRAVITY_Y: ParamField<Self> = param_field!(gravity.y, "gravity y", "m/s²", (-1.0e4, 1.0e4), false, (-30.0, 30.0), false);
+    /// [`cfl_number`](Self::cfl_number).
+    pub const CFL_NUMBER: ParamField<Self> = param_field!(cfl_number, "CFL number", "", (0.01, 1.0), false, (0.01, 1.0), false);
+    /// [`wall_restitution`](Self::wall_restitution).
+    pub const WALL_RESTITUTION: ParamField<Self> = param_field!(wall_restitution, "wall restitution", "", (0.0, 1.0), false, (0.0, 1.0), false);
+    /// [`DfsphSettings::cfl_number`].
+    pub const DFSPH_CFL_NUMBER: ParamField<Self> = param_field!(dfsph.cfl_number, "flow CFL C", "", (0.05, 1.0), false, (0.05, 1.0), false);
+    /// [`DfsphSettings::max_time_step`].
+    pub const DFSPH_MAX_TIME_STEP: ParamField<Self> = param_field!(dfsph.max_time_step, "longest sub-step", "s", (1.0e-5, 0.1), false, (1.0e-4, 0.02), true);
+    /// [`DfsphSettings::density_tolerance`].
+    pub const DFSPH_DENSITY_TOLERANCE: ParamField<Self> = param_field!(dfsph.density_tolerance, "density tolerance", "", (1.0e-6, 0.1), false, (1.0e-6, 0.01), true);
+    /// [`DfsphSettings::divergence_tolerance`].
+    pub const DFSPH_DIVERGENCE_TOLERANCE: ParamField<Self> = param_field!(dfsph.divergence_tolerance, "divergence tolerance", "", (1.0e-6, 1.0), false, (1.0e-5, 0.1), true);
+}
+
 impl ParamTable for SphParams {
     const OWNER: &'static str = "SphParams";
 
-    /// The numeric fields with a plain range, in the panel's order (the fields whose range
-    /// depends on others, the vectors and the counts are checked in [`validate`](Self::validate)
-    /// itself).
-    #[rustfmt::skip]
+    /// The numeric fields with a range, in the panel's order (gravity as a vector, the tank,
+    /// the counts and the switches are checked in [`validate`](Self::validate) itself).
     const FIELDS: &'static [ParamField<Self>] = &[
-        // path, label, unit, accepted range, zero excluded, slider range, logarithmic
-        param_field!(rest_density, "rest density ρ₀", "kg/m³", (0.0, 1.0e5), true, (0.5, 5000.0), true),
-        param_field!(speed_of_sound, "speed of sound c₀", "m/s", (0.0, 1.0e4), true, (1.0, 300.0), true),
-        param_field!(eos_exponent, "EOS exponent γ", "", (1.0, 10.0), false, (1.0, 10.0), false),
-        param_field!(kinematic_viscosity, "kinematic viscosity ν", "m²/s", (0.0, 100.0), false, (0.0, 1.0e-2), true),
-        param_field!(artificial_viscosity, "artificial viscosity α", "", (0.0, 10.0), false, (0.0, 1.0), false),
-        param_field!(cfl_number, "CFL number", "", (0.01, 1.0), false, (0.01, 1.0), false),
-        param_field!(wall_restitution, "wall restitution", "", (0.0, 1.0), false, (0.0, 1.0), false),
-        param_field!(dfsph.cfl_number, "flow CFL C", "", (0.05, 1.0), false, (0.05, 1.0), false),
-        param_field!(dfsph.max_time_step, "longest sub-step", "s", (1.0e-5, 0.1), false, (1.0e-4, 0.02), true),
-        param_field!(dfsph.density_tolerance, "density tolerance", "", (1.0e-6, 0.1), false, (1.0e-6, 0.01), true),
-        param_field!(dfsph.divergence_tolerance, "divergence tolerance", "", (1.0e-6, 1.0), false, (1.0e-5, 0.1), true),
+        Self::REST_DENSITY,
+        Self::SPEED_OF_SOUND,
+        Self::EOS_EXPONENT,
+        Self::BACKGROUND_PRESSURE,
+        Self::KINEMATIC_VISCOSITY,
+        Self::ARTIFICIAL_VISCOSITY,
+        Self::SUPPORT_RATIO,
+        Self::CFL_NUMBER,
+        Self::WALL_RESTITUTION,
+        Self::DFSPH_CFL_NUMBER,
+        Self::DFSPH_MAX_TIME_STEP,
+        Self::DFSPH_DENSITY_TOLERANCE,
+        Self::DFSPH_DIVERGENCE_TOLERANCE,
     ];
 }
 
@@ -312,24 +277,7 @@ impl SphParams {
         let range = |field, value, min, max, unit| {
             crate::params::check_range(Self::OWNER, field, value, (min, max), unit)
         };
-        for field in Self::FIELDS {
-            field.check(self)?;
-        }
-        let stiffness = self.tait_stiffness();
-        range(
-            "background_pressure",
-            self.background_pressure,
-            0.0,
-            10.0 * stiffness,
-            "Pa",
-        )?;
-        range(
-            "particle_spacing",
-            self.particle_spacing,
-            1.0e-5,
-            100.0,
-            "m",
-        )?;
+        // Checked before the table, whose row gives a plainer message.
         range("support_ratio", self.support_ratio, 1.5, 5.0, "spacings").map_err(|e| {
             SphParamsError {
                 owner: "SphParams",
@@ -353,6 +301,16 @@ impl SphParams {
                 ),
             });
         }
+        for field in Self::FIELDS {
+            field.check(self)?;
+        }
+        range(
+            "particle_spacing",
+            self.particle_spacing,
+            1.0e-5,
+            100.0,
+            "m",
+        )?;
         if self.max_substeps == 0 || self.max_substeps > 100_000 {
             return Err(SphParamsError {
                 owner: "SphParams",

@@ -1,13 +1,12 @@
 //! The Barnes-Hut gravity plugin. See [`GravityPlugin`].
 
-mod kernel;
 mod params;
-mod quadtree;
 mod scenario;
 mod systems;
 
 use crate::body::{Position, Velocity};
 use crate::control::simulation_running;
+use crate::fluid::SubstepHooks;
 use crate::schedule::{
     BodyForceSystems, ParticleSchedulePlugin, ParticleSystems, SphSubstep, SphSubstepSystems,
 };
@@ -15,9 +14,11 @@ use bevy::ecs::intern::Interned;
 use bevy::ecs::schedule::ScheduleLabel;
 use bevy::prelude::*;
 
-pub use kernel::simd_path;
+pub use crate::sim::gravity::kernel::simd_path;
+pub use crate::sim::gravity::quadtree::{
+    Field, FieldQuery, Multipole, Node, QuadTree, direct_field_at,
+};
 pub use params::{GravityParams, GravityParamsError, GravityParamsStatus};
-pub use quadtree::{Field, FieldQuery, Multipole, Node, QuadTree, direct_field_at};
 pub use scenario::{FluidPlanets, GalaxyDisc, GravityScenario};
 pub use systems::{GravitySolver, GravityStats};
 
@@ -201,5 +202,10 @@ impl Plugin for GravityPlugin {
                 .run_if(systems::fluid_has_mass)
                 .in_set(SphSubstepSystems::FieldForces),
         );
+        SubstepHooks::register(app, 2, |world| {
+            world
+                .run_system_cached(systems::fluid_has_mass)
+                .unwrap_or(true)
+        });
     }
 }

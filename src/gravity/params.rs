@@ -1,8 +1,8 @@
 //! Runtime-tunable gravity parameters and their validation. See
 //! [`GravityPlugin`](crate::gravity::GravityPlugin).
 
-use super::quadtree::Multipole;
 use crate::params::{ParamField, ParamTable, param_field};
+use crate::sim::gravity::quadtree::Multipole;
 use bevy::prelude::*;
 
 /// Barnes-Hut gravity parameters. Edit them at any time; every change is validated and a bad one

@@ -5,7 +5,8 @@
 use super::{GravityParams, Mass};
 use crate::body::{Position, Velocity};
 use crate::control::ResetSimulation;
-use crate::fluid::{FluidBlock, FluidParticle, SphParams};
+use crate::fluid::{FluidParticle, SphParams};
+use crate::gameplay::FluidBlock;
 use bevy::prelude::*;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;

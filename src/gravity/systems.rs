@@ -4,11 +4,10 @@
 //! [`GravityPlugin`](crate::gravity::GravityPlugin).
 
 use super::params::{GravityParams, GravityParamsError};
-use super::quadtree::Field;
-use super::quadtree::{FieldQuery, QuadTree, direct_field_at};
 use super::{GravityAcceleration, GravityPotential, GravitySlot, Mass};
 use crate::body::{Position, Velocity};
 use crate::fluid::{Acceleration, FluidParticle};
+use crate::sim::gravity::quadtree::{Field, FieldQuery, QuadTree, direct_field_at};
 use bevy::platform::time::Instant;
 use bevy::prelude::*;
 

@@ -6,9 +6,9 @@ mod tools;
 
 use crate::body::{Position, Velocity};
 use crate::control::{ResetSimulation, SimulationControl, simulation_running};
-use crate::fluid::{
-    Acceleration, FluidParticle, LoadSlot, SaveSlot, SphParams, SphSubstep, SphSubstepSystems,
-};
+use crate::fluid::{Acceleration, FluidParticle, SphParams, SphSubstep, SphSubstepSystems};
+use crate::fluid::{Obstacle, SubstepHooks};
+use crate::gameplay::{LoadSlot, SaveSlot, free_spot, near};
 use crate::gravity::{GravityAcceleration, Mass};
 use crate::render::{ParticleCamera, ParticleDraw, ParticleView, cursor_to_world};
 use crate::schedule::{BodyForceSystems, ParticleSchedule, ParticleSystems};
@@ -26,7 +26,7 @@ pub(crate) use tools::{PointerAction, PointerForce, nozzle_row, tilted_gravity};
 ///
 /// Keyboard: `Space` pauses, `.` runs a single tick, `R` resets the scenario, `L` switches
 /// between the liquid and the particles ([`ParticleView::draw`]), `F5` saves the fluid into the
-/// [`SnapshotSlot`](crate::fluid::SnapshotSlot) and `F9` loads it, `←`/`→` tilt the tank (turn
+/// [`SnapshotSlot`](crate::gameplay::SnapshotSlot) and `F9` loads it, `←`/`→` tilt the tank (turn
 /// gravity), `↑` levels it, `1`–`5` pick the tool.
 ///
 /// The cursor is read each frame before the fixed steps
@@ -159,6 +159,9 @@ impl Plugin for ParticleInteractPlugin {
                 apply_pointer_force.in_set(SphSubstepSystems::PointerForces),
             )
             .add_systems(Update, (keyboard_controls, draw_pointer));
+        SubstepHooks::register(app, 1, |world| {
+            world.resource::<Pointer>().force.action != PointerAction::None
+        });
     }
 
     /// The fixed-step systems go into the particle schedule once every plugin is built, so the
@@ -278,6 +281,7 @@ fn pour_particles(
     params: Res<SphParams>,
     time: Res<Time>,
     particles: Query<&Position, With<FluidParticle>>,
+    obstacles: Query<&Obstacle>,
     mut commands: Commands,
 ) {
     let (Some(center), true) = (pointer.world, pointer.tool_active) else {
@@ -294,24 +298,16 @@ fn pour_particles(
         return;
     }
     pointer.poured = 0.0;
-    let inside = |p: &Vec2| {
-        params.tank.is_none_or(|tank| {
-            p.x > 0.5 * spacing
-                && p.y > 0.5 * spacing
-                && p.x < tank.width - 0.5 * spacing
-                && p.y < tank.height - 0.5 * spacing
-        })
-    };
-    let min_gap_sq = (0.8 * spacing) * (0.8 * spacing);
-    let row: Vec<Vec2> = nozzle_row(center, jet, settings.radius, spacing)
-        .into_iter()
-        .filter(inside)
-        .filter(|p| {
-            particles
-                .iter()
-                .all(|q| q.distance_squared(*p) >= min_gap_sq)
-        })
-        .collect();
+    let reach = settings.radius + 2.0 * spacing;
+    let obstacles: Vec<Obstacle> = obstacles.iter().copied().collect();
+    let mut taken = near(particles.iter().map(|p| p.0), center, reach);
+    let mut row = Vec::new();
+    for p in nozzle_row(center, jet, settings.radius, spacing) {
+        if free_spot(p, &params, &obstacles, &taken) {
+            taken.push(p);
+            row.push(p);
+        }
+    }
     let room = settings
         .max_particles
         .saturating_sub(particles.iter().len());
@@ -404,7 +400,10 @@ fn push_bodies(
 }
 
 /// Space, `.`, `R`, `L`, `F5`/`F9`, arrows and `1`–`5`.
-#[allow(clippy::too_many_arguments)]
+#[expect(
+    clippy::too_many_arguments,
+    reason = "a Bevy system: one parameter per resource and query it reads"
+)]
 fn keyboard_controls(
     keys: Res<ButtonInput<KeyCode>>,
     view: Option<ResMut<ParticleView>>,

@@ -76,18 +76,16 @@ impl PointerForce {
     }
 }
 
-/// Positions of one row of a pouring nozzle centred at `center`, `width` (m) wide across the
-/// pour `direction`, at `spacing` (m): at least one particle.
+/// Positions of one row of the pour tool's nozzle centred at `center`, `width` (m) wide across
+/// the pour `direction`, at `spacing` (m): at least one particle and at most 256, none for a
+/// spacing that is not positive. The row is the emitters' (`gameplay::nozzle_row`).
 pub fn nozzle_row(center: Vec2, direction: Vec2, width: f32, spacing: f32) -> Vec<Vec2> {
     if !(spacing > 0.0 && center.is_finite()) {
         return Vec::new();
     }
-    let across = direction.normalize_or(Vec2::NEG_Y).perp();
-    let count = ((width.max(0.0) / spacing).floor() as usize).clamp(1, 256);
-    let first = -0.5 * (count - 1) as f32;
-    (0..count)
-        .map(|i| center + across * (first + i as f32) * spacing)
-        .collect()
+    let count = ((width.max(0.0) / spacing).floor() as u32).clamp(1, 256);
+    let direction = direction.normalize_or(Vec2::NEG_Y);
+    crate::gameplay::nozzle_row(center, direction, count, spacing, 0.0).collect()
 }
 
 /// Gravity of the same magnitude as `gravity`, tilted as if the tank were turned by `angle`

@@ -4,13 +4,11 @@
 mod widgets;
 
 use crate::control::{ResetSimulation, SimulationControl};
-use crate::fluid::{
-    KernelKind, LoadSlot, PressureSolver, SaveSlot, ScenarioKind, SnapshotSlot, SphParams,
-    SphParamsStatus, SphScenario, SphStats,
-};
+use crate::fluid::{KernelKind, PressureSolver, SphParams, SphParamsStatus, SphStats};
+use crate::gameplay::{LoadSlot, SaveSlot, ScenarioKind, SnapshotSlot, SphScenario};
 use crate::gravity::{GravityParams, GravityStats, Multipole};
 use crate::interact::{Pointer, PointerSettings, PointerTool};
-use crate::params::ParamTable;
+use crate::params::{ParamField, ParamTable};
 use crate::render::{
     BodyColor, BodyView, ColorMap, LiquidStyle, ParticleDraw, ParticleView, RenderMode, ViewInsets,
 };
@@ -406,29 +404,17 @@ fn fluid_section(ui: &mut egui::Ui, data: &mut PanelData, fluid: bool) {
                     p = keep(SphParams::gas(), &p);
                 }
             });
-            for field in ["rest_density", "speed_of_sound", "eos_exponent"] {
-                field_slider(ui, &mut p, field);
+            for row in [
+                &SphParams::REST_DENSITY,
+                &SphParams::SPEED_OF_SOUND,
+                &SphParams::EOS_EXPONENT,
+                &SphParams::BACKGROUND_PRESSURE,
+                &SphParams::KINEMATIC_VISCOSITY,
+                &SphParams::ARTIFICIAL_VISCOSITY,
+                &SphParams::SUPPORT_RATIO,
+            ] {
+                field_slider(ui, &mut p, row);
             }
-            let stiffness = p.tait_stiffness();
-            param_slider(
-                ui,
-                &mut p.background_pressure,
-                0.0..=2.0 * stiffness,
-                "background pressure",
-                "Pa",
-                false,
-            );
-            for field in ["kinematic_viscosity", "artificial_viscosity"] {
-                field_slider(ui, &mut p, field);
-            }
-            param_slider(
-                ui,
-                &mut p.support_ratio,
-                1.5..=5.0,
-                "support H/Δx",
-                "",
-                false,
-            );
             enum_combo(
                 ui,
                 "kernel",
@@ -436,22 +422,8 @@ fn fluid_section(ui: &mut egui::Ui, data: &mut PanelData, fluid: bool) {
                 &KernelKind::ALL,
                 KernelKind::label,
             );
-            param_slider(
-                ui,
-                &mut p.gravity.x,
-                -30.0..=30.0,
-                "gravity x",
-                "m/s²",
-                false,
-            );
-            param_slider(
-                ui,
-                &mut p.gravity.y,
-                -30.0..=30.0,
-                "gravity y",
-                "m/s²",
-                false,
-            );
+            field_slider(ui, &mut p, &SphParams::GRAVITY_X);
+            field_slider(ui, &mut p, &SphParams::GRAVITY_Y);
             if let Some(tank) = &mut p.tank {
                 param_slider(ui, &mut tank.width, 0.1..=10.0, "tank width", "m", true);
                 param_slider(ui, &mut tank.height, 0.1..=10.0, "tank height", "m", true);
@@ -461,15 +433,10 @@ fn fluid_section(ui: &mut egui::Ui, data: &mut PanelData, fluid: bool) {
                 "pressure solver",
                 &mut p.solver,
                 &PressureSolver::ALL,
-                |s| match s {
-                    PressureSolver::Wcsph => "WCSPH",
-                    PressureSolver::Dfsph => "DFSPH",
-                },
+                PressureSolver::label,
             );
             match p.solver {
-                PressureSolver::Wcsph => {
-                    field_slider(ui, &mut p, "cfl_number");
-                }
+                PressureSolver::Wcsph => field_slider(ui, &mut p, &SphParams::CFL_NUMBER),
                 PressureSolver::Dfsph => dfsph_settings(ui, &mut p),
             }
             ui.add(
@@ -477,7 +444,7 @@ fn fluid_section(ui: &mut egui::Ui, data: &mut PanelData, fluid: bool) {
                     .logarithmic(true)
                     .text("max sub-steps / tick"),
             );
-            field_slider(ui, &mut p, "wall_restitution");
+            field_slider(ui, &mut p, &SphParams::WALL_RESTITUTION);
             ui.small(format!(
                 "particle spacing Δx = {:.1} mm (set by the scenario's particle count)",
                 1000.0 * p.particle_spacing
@@ -496,15 +463,13 @@ fn fluid_section(ui: &mut egui::Ui, data: &mut PanelData, fluid: bool) {
 
 /// The slider of one row of `P`'s [`ParamTable::FIELDS`]: the label, unit, range and scale the
 /// row gives.
-fn field_slider<P: ParamTable>(ui: &mut egui::Ui, p: &mut P, field: &str) {
-    let Some(row) = P::field(field) else {
-        return;
-    };
+fn field_slider<P: ParamTable>(ui: &mut egui::Ui, p: &mut P, row: &ParamField<P>) {
     let mut value = (row.get)(p);
+    let (min, max) = row.slider_range(p);
     param_slider(
         ui,
         &mut value,
-        row.slider.0..=row.slider.1,
+        min..=max,
         row.label,
         row.unit,
         row.logarithmic,
@@ -516,13 +481,13 @@ fn field_slider<P: ParamTable>(ui: &mut egui::Ui, p: &mut P, field: &str) {
 
 /// The divergence-free solver's settings.
 fn dfsph_settings(ui: &mut egui::Ui, p: &mut SphParams) {
-    for field in [
-        "dfsph.cfl_number",
-        "dfsph.max_time_step",
-        "dfsph.density_tolerance",
-        "dfsph.divergence_tolerance",
+    for row in [
+        &SphParams::DFSPH_CFL_NUMBER,
+        &SphParams::DFSPH_MAX_TIME_STEP,
+        &SphParams::DFSPH_DENSITY_TOLERANCE,
+        &SphParams::DFSPH_DIVERGENCE_TOLERANCE,
     ] {
-        field_slider(ui, p, field);
+        field_slider(ui, p, row);
     }
     let d = &mut p.dfsph;
     ui.add(
@@ -546,7 +511,7 @@ fn gravity_section(ui: &mut egui::Ui, data: &mut PanelData) {
         .show(ui, |ui| {
             let mut g = (**gravity).clone();
             for row in GravityParams::FIELDS {
-                field_slider(ui, &mut g, row.field);
+                field_slider(ui, &mut g, row);
             }
             ui.add(egui::Slider::new(&mut g.leaf_capacity, 1..=64).text("leaf capacity"));
             enum_combo(

@@ -254,7 +254,10 @@ fn color_map_image(map: super::ColorMap) -> Image {
 /// Spawns the liquid view for the first [`ParticleCamera`]: the field camera, the splat mesh and
 /// the surface quad. Runs in `Update`, a frame after the camera appears, so that a UI plugin
 /// that attaches itself to the first camera (bevy_egui) finds the main one.
-#[allow(clippy::too_many_arguments)]
+#[expect(
+    clippy::too_many_arguments,
+    reason = "a Bevy system: one parameter per resource and query it reads"
+)]
 fn spawn_liquid_view(
     view: Option<Res<LiquidView>>,
     cameras: Query<Entity, With<ParticleCamera>>,
@@ -337,7 +340,6 @@ fn spawn_liquid_view(
 /// Keeps the field camera on the main camera's view (same transform, same visible area), the
 /// field texture at [`LiquidStyle::resolution`] of the window, the surface quad over the view,
 /// and turns the view on or off with [`ParticleView::draw`].
-#[allow(clippy::type_complexity)]
 fn follow_camera(
     view: Option<Res<LiquidView>>,
     particle_view: Res<ParticleView>,
@@ -430,7 +432,10 @@ pub(crate) type SplatData = (
 /// positions, carrying weight, speed and colour-map position), and the surface material from
 /// the [`LiquidStyle`] and [`ParticleView`] when they change. Reuses the mesh's buffers: no
 /// allocation once the particle count stops growing.
-#[allow(clippy::too_many_arguments)]
+#[expect(
+    clippy::too_many_arguments,
+    reason = "a Bevy system: one parameter per resource and query it reads"
+)]
 pub(crate) fn update_liquid(
     view: Option<ResMut<LiquidView>>,
     particle_view: Res<ParticleView>,

@@ -8,7 +8,7 @@ mod liquid;
 mod view;
 
 use crate::body::{Position, Velocity};
-use crate::fluid::{Density, FluidParticle, Obstacle, Pressure, SphParams};
+use crate::fluid::{Density, FluidParticle, Obstacle, Pressure, Shape, SphParams};
 use crate::schedule::{ParticleSchedule, ParticleSystems};
 use bevy::asset::RenderAssetUsages;
 use bevy::prelude::*;
@@ -460,11 +460,11 @@ fn draw_outlines(
         gizmos.rect_2d(Isometry2d::from_translation(0.5 * size), size, color);
     }
     for obstacle in &obstacles {
-        match *obstacle {
-            Obstacle::Circle { center, radius } => {
+        match obstacle.0 {
+            Shape::Circle { center, radius } => {
                 gizmos.circle_2d(Isometry2d::from_translation(center), radius, color);
             }
-            Obstacle::Segment { start, end, radius } => {
+            Shape::Segment { start, end, radius } => {
                 let normal = (end - start).normalize_or_zero().perp() * radius;
                 gizmos.line_2d(start + normal, end + normal, color);
                 gizmos.line_2d(start - normal, end - normal, color);

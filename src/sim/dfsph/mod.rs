@@ -1,0 +1,732 @@
+//! An incompressible pressure solver with the structure of divergence-free SPH (Bender &
+//! Koschier, "Divergence-free smoothed particle hydrodynamics", SCA 2015; TVCG 2017), over the
+//! [`layout`](super::layout). Pure, no ECS.
+//!
+//! One sub-step, in the order of [`step`](super::step), which both drivers call (the stage
+//! methods are in [`stages`]):
+//! 1. [`Dfsph::prepare`]: from the sorted snapshot, each particle's fluid neighbours with their
+//!    volume-weighted kernel gradients `gᵢⱼ = s V ∇Wᵢⱼ` (cached: every solver iteration reuses
+//!    them), the summed wall gradient, the density `ρ̂ᵢ = ρᵢ/ρ₀` by summation over fluid and
+//!    wall particles, and the DFSPH factor `αᵢ = 1/(|Σⱼ gᵢⱼ + 2 g_wall,ᵢ|² + Σⱼ |gᵢⱼ|²)`.
+//! 2. [`Dfsph::solve_divergence`]: the stiffness `κᵛ` that cancels the density change rate
+//!    `Dρ̂ᵢ/Dt = Σⱼ gᵢⱼ·(vᵢ − vⱼ) + 2 g_wall,ᵢ·vᵢ` of the current velocities (walls mirror the
+//!    particle's velocity; particles with a deficient neighbourhood,
+//!    [`DEFICIENT_NEIGHBORHOOD`], are left alone).
+//! 3. The caller adds non-pressure accelerations ([`Dfsph::non_pressure_acceleration`]: gravity,
+//!    viscosity, the walls' hydrostatic head) and its own external forces, picks the step
+//!    ([`Dfsph::stable_time_step`]: the flow's CFL `C Δx / v_max`, with the speed the largest
+//!    pressure can give ([`pressure_speed`]) counted in `v_max`, the force and viscous limits),
+//!    and stores the accelerations with [`Dfsph::set_acceleration`].
+//! 4. [`Dfsph::solve_density`]: predicts `v* = v + dt a`, then the stiffness `κ` that brings the
+//!    predicted density `ρ̂ᵢ + dt Dρ̂ᵢ/Dt` back to one wherever it is compressed.
+//! 5. The caller moves each particle with its solved velocity ([`Dfsph::velocity`]).
+//!
+//! Both solves change velocities by the symmetric pressure force
+//! `Δvᵢ = −dt (Σⱼ (κᵢ + κⱼ) gᵢⱼ + 2κᵢ g_wall,ᵢ)`: momentum is conserved pair by pair, and a wall
+//! particle mirrors the pressure of the fluid particle it pushes (Akinci et al. 2012, who count
+//! it once: mirrored, the pressure at a wall is the hydrostatic one, not twice it). Mirroring
+//! both the pressure and the velocity keeps the pressure equations symmetric (the push is the
+//! transpose of the density rate); mirroring the pressure alone made the wall rows of a resting
+//! layer bounce at 0.4 m/s under a 0.1% tolerance.
+//!
+//! The solves ([`solve`]) are a bound-constrained, Jacobi-preconditioned conjugate gradient
+//! (MPRGP) on those symmetric equations with the stiffness kept non-negative (pressure pushes,
+//! never pulls: a particle that is not compressed relaxes to zero pressure instead of holding
+//! the last sub-step's). They stop once the mean error is under the settings' tolerance and the
+//! largest under [`LARGEST_ERROR_RATIO`] times it, for the density solve also under
+//! [`PRESSURE_ACCURACY`] of what the largest acceleration moves in a step (a smooth pressure
+//! error hides from a density tolerance in deep water). The stiffness is a pressure per rest
+//! density (`p = ρ₀ κ`, m²/s²), independent of the step, so it warm-starts the next sub-step:
+//! the density solve from its SPH average ([`Dfsph::prepare`] smooths it, so that the stiffness
+//! modes the equations cannot see do not pile up), the divergence solve from half of it, as
+//! Bender & Koschier do. A compressed particle's excess density is relieved at most at
+//! [`MAX_RELIEF_RATE`], so fluid spawned too densely expands instead of exploding.
+//!
+//! Wall particles lie on the fluid's rest lattice and count with the fluid's particle volume in
+//! the density sum, so a particle at a wall has rest density at rest. Kernel gradients carry the
+//! lattice correction [`SphConstants::gradient_scale`], which makes the discrete gradient of a
+//! linear field exact at rest, so hydrostatic pressure rises at `ρ₀g`.
+//!
+//! Sums over particles are taken in f64 chunk by chunk of fixed size ([`CHUNK`]), so the
+//! iteration count, and with it every result, is the same on any number of threads.
+//!
+//! Why the deep layers boiled before (the depth issue): the pressure force on a particle depends
+//! on where its neighbours are, with a stiffness that grows with the pressure, and that part is
+//! integrated explicitly. At rest the flow's CFL let steps grow to the longest allowed, past
+//! `Δx/√(2κ)` at the floor of a deep layer, and the floor rows oscillated into a boil; the step
+//! now counts that speed. And the old mean-error stop let a smooth pressure error that carries
+//! a tenth of the weight hide at the floor rows.
+//!
+
+use super::clock::SubstepClock;
+use super::config::SphConstants;
+use super::density::{max_length, with_kernels};
+use super::kernels::RadialKernel;
+use super::layout::{FluidSnapshot, SlotVectors, Walls};
+use super::parallel::{CHUNK, Parallel, for_each_slot, run_jobs};
+use crate::sim::simd::Simd;
+use bevy::math::{Vec2, Vec4};
+use rows::{BLOCK, Rows};
+use solve::Target;
+
+#[expect(
+    unsafe_code,
+    reason = "the AVX2 sums, each unsafe block with its SAFETY note"
+)]
+mod rows;
+mod solve;
+mod stages;
+
+pub use solve::{LARGEST_ERROR_RATIO, MAX_RELIEF_RATE};
+
+/// The density solve's largest error is held under this fraction of the displacement the
+/// largest acceleration `a` makes over a step, `a dt²/Δx` as a density change. A pressure
+/// error that pushes a whole column (a smooth error, the slowest for any solver) shows as a
+/// density error only at the column's floor, of about `δa dt²/Δx`, and the mean hides it: this
+/// keeps the pressure within about this fraction of the load it carries at any depth (a layer 100
+/// particles deep read 0.90 of the hydrostatic slope under a mean tolerance alone, 1.00 with it).
+pub const PRESSURE_ACCURACY: f32 = 0.01;
+
+/// A particle with fewer neighbours (fluid and wall) than this fraction of a full rest
+/// neighbourhood is deficient: the divergence solve leaves it alone (Bender & Koschier's
+/// "particle deficiency", which keeps splashes and the free surface from being pinned).
+pub const DEFICIENT_NEIGHBORHOOD: f32 = 0.6;
+
+/// Walls mirror the pressure of the fluid particle they push (Akinci et al. 2012 take it once;
+/// mirrored, a particle at a wall holds the hydrostatic pressure of its depth instead of twice
+/// it, which matters where wall pressure is read).
+const WALL_MIRROR: f32 = 2.0;
+
+/// Per-particle values of the current sub-step, by sorted slot.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+struct SlotState {
+    /// Cached fluid neighbours.
+    count: u32,
+    /// `ρ/ρ₀` by summation over fluid and wall particles.
+    density: f32,
+    /// The DFSPH factor `1/(|Σⱼ gᵢⱼ + 2 g_wall|² + Σⱼ |gᵢⱼ|²)`, m² (zero without neighbours): the
+    /// inverse of the diagonal of the pressure equations, per `dt²`.
+    factor: f32,
+    /// Whether the neighbourhood is deficient (see [`DEFICIENT_NEIGHBORHOOD`]).
+    deficient: bool,
+    /// `Σ_b s V ∇W_ib` over wall particles, 1/m.
+    wall_gradient: Vec2,
+    /// `Σ_b V (r·∇W)/(r² + η²)` over wall particles (dimensionless, negative), for wall friction.
+    wall_viscosity: f32,
+    /// `−Σ_b (g·(x_b − xᵢ)) s V ∇W_ib`, m/s²: the hydrostatic head of the walls' mirrored
+    /// pressure (Adami et al. 2012), which a pressed particle feels on top of its own.
+    wall_head: Vec2,
+}
+
+/// Scratch of the solves, by sorted slot.
+#[derive(Debug, Clone, Default)]
+struct Scratch {
+    /// The solve's search direction (and the smoothed warm start), by slot.
+    delta: Vec<f32>,
+    /// The pressure push of the search direction, by slot.
+    push: Vec<Vec2>,
+    /// What the solve keeps of each particle.
+    unknowns: Vec<solve::Unknown>,
+}
+
+/// What the last sub-step's solves did.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct DfsphReport {
+    /// Iterations of the density solve.
+    pub density_iterations: u32,
+    /// Iterations of the divergence solve.
+    pub divergence_iterations: u32,
+    /// Mean predicted density error left after the density solve, fraction.
+    pub density_error: f32,
+    /// Mean density change per step left after the divergence solve, fraction.
+    pub divergence_error: f32,
+}
+
+/// The divergence-free solver's state for one sub-step, by sorted slot (see the module docs).
+#[derive(Debug, Clone, Default)]
+pub struct Dfsph {
+    /// Each particle's cached fluid neighbours with their volume-weighted kernel gradients.
+    rows: Rows,
+    /// `V Wᵢⱼ` of each cached neighbour, laid out as `rows` (the neighbour's share of the
+    /// particle's density; apart from `rows`, which the iterations read, to keep those short).
+    weights: Vec<f32>,
+    state: Vec<SlotState>,
+    velocity: Vec<Vec2>,
+    acceleration: SlotVectors,
+    kappa: Vec<f32>,
+    kappa_divergence: Vec<f32>,
+    scratch: Scratch,
+    /// The length `1/λ_max` of the solve's projected gradient steps (see
+    /// [`lattice_spectral_radius`]).
+    expansion_step: f32,
+    /// The kernel and support ratio `expansion_step` was computed for.
+    expansion_key: Option<(super::kernels::KernelKind, u32)>,
+    /// What the last sub-step did.
+    pub report: DfsphReport,
+}
+
+impl Dfsph {
+    /// Number of particles in the current sub-step.
+    pub fn len(&self) -> usize {
+        self.state.len()
+    }
+
+    /// Whether there are no particles.
+    pub fn is_empty(&self) -> bool {
+        self.state.is_empty()
+    }
+
+    /// Step 1: caches neighbours and gradients, sums densities, computes the DFSPH factors, and
+    /// takes the velocities from the snapshot. `warm_start(slot)` gives each particle's
+    /// stiffness `[κ, κᵛ]` from the last sub-step (m²/s²).
+    pub fn prepare(
+        &mut self,
+        c: &SphConstants,
+        fluid: &FluidSnapshot,
+        walls: &Walls,
+        warm_start: impl Fn(usize) -> Vec2 + Sync,
+        parallel: &impl Parallel,
+    ) {
+        let n = fluid.len();
+        self.state.clear();
+        self.state.resize(n, SlotState::default());
+        self.velocity.clear();
+        self.velocity.extend(
+            fluid.kinematics[..n]
+                .iter()
+                .map(|&[_, _, vx, vy]| Vec2::new(vx, vy)),
+        );
+        self.acceleration.reset(n);
+        self.kappa.resize(n, 0.0);
+        self.kappa_divergence.resize(n, 0.0);
+        self.scratch.delta.resize(n, 0.0);
+        let warm = c.dfsph.warm_start;
+        for slot in 0..n {
+            let k = if warm { warm_start(slot) } else { Vec2::ZERO };
+            self.kappa[slot] = k.x.max(0.0);
+            self.kappa_divergence[slot] = k.y.max(0.0);
+        }
+        // Rows a little longer than a rest neighbourhood: the iterations stream them, so they are
+        // kept short. A compressed particle with more neighbours makes them long enough for the
+        // most seen, and the pass runs again.
+        let lattice = lattice_neighbors(c) as usize;
+        let mut stride = (lattice + lattice / 2)
+            .next_multiple_of(BLOCK)
+            .max(self.rows.stride());
+        loop {
+            // Rows are written before they are read (up to each particle's count).
+            self.rows.resize(n, stride);
+            self.weights.resize(n * stride, 0.0);
+            let most = with_kernels!(c.kernel, c.support, |w, g| {
+                self.gather_neighbors(&w, &g, c, fluid, walls, stride, parallel)
+            });
+            if most <= stride {
+                break;
+            }
+            stride = (most + 4).next_multiple_of(BLOCK);
+        }
+        self.report = DfsphReport::default();
+        if warm {
+            self.smooth_warm_start(c, parallel);
+        }
+        let key = Some((c.kernel, (c.support / c.spacing).to_bits()));
+        if self.expansion_key != key {
+            let radius = with_kernels!(c.kernel, c.support, |_w, g| lattice_spectral_radius(&g, c));
+            self.expansion_step = 1.0 / radius.max(1.0);
+            self.expansion_key = key;
+        }
+    }
+
+    /// The neighbour pass of [`prepare`](Self::prepare): fills rows of `stride` entries and
+    /// returns the most neighbours any particle has (more than `stride`: the rows were short).
+    #[expect(clippy::too_many_arguments, reason = "one pass, spelled out")]
+    fn gather_neighbors<W: RadialKernel, G: RadialKernel>(
+        &mut self,
+        w: &W,
+        g: &G,
+        c: &SphConstants,
+        fluid: &FluidSnapshot,
+        walls: &Walls,
+        stride: usize,
+        parallel: &impl Parallel,
+    ) -> usize {
+        let n = self.state.len();
+        let scaled_volume = c.gradient_scale * c.volume;
+        let deficient_below = DEFICIENT_NEIGHBORHOOD * lattice_neighbors(c) as f32;
+        let support_sq = Vec4::splat(c.support_sq);
+        let tiny = Vec4::splat(1e-12 * c.support_sq);
+        let eta_sq = 0.01 * c.smoothing_length * c.smoothing_length;
+        let mut jobs: Vec<_> = self
+            .state
+            .chunks_mut(CHUNK)
+            .zip(self.rows.chunks_mut(CHUNK))
+            .zip(self.weights.chunks_mut(CHUNK * stride))
+            .enumerate()
+            .map(|(k, ((state, rows), weights))| (k * CHUNK, state, rows, weights, 0usize))
+            .collect();
+        run_jobs(
+            parallel,
+            n,
+            &mut jobs,
+            |(start, states, rows, weights, most)| {
+                for (k, state) in states.iter_mut().enumerate() {
+                    let x = fluid.points.get(*start + k);
+                    let row_weights = &mut weights[k * stride..(k + 1) * stride];
+                    let mut len = 0usize;
+                    let mut density = Vec4::ZERO;
+                    let (mut sum_x, mut sum_y, mut sum_sq) = (Vec4::ZERO, Vec4::ZERO, Vec4::ZERO);
+                    fluid.points.for_each_batch(x, |first, dx, dy, r2| {
+                        let values = w.value_sq_x4(r2);
+                        density += values;
+                        let inside = r2.cmplt(support_sq) & r2.cmpgt(tiny);
+                        let mut mask = inside.bitmask();
+                        if mask == 0 {
+                            return;
+                        }
+                        let slope = g.derivative_over_r_x4(r2.min(support_sq).sqrt());
+                        // ∇ᵢWᵢⱼ = slope (xᵢ − xⱼ) = −slope (dx, dy); zero on lanes outside.
+                        let scale = Vec4::select(inside, -scaled_volume * slope, Vec4::ZERO);
+                        let (gx, gy) = (scale * dx, scale * dy);
+                        sum_x += gx;
+                        sum_y += gy;
+                        sum_sq += gx * gx + gy * gy;
+                        let (gx, gy) = (gx.to_array(), gy.to_array());
+                        let values = (c.volume * values).to_array();
+                        while mask != 0 {
+                            let lane = mask.trailing_zeros() as usize;
+                            mask &= mask - 1;
+                            if len < stride {
+                                let gradient = Vec2::new(gx[lane], gy[lane]);
+                                rows.set(k, len, first + lane, gradient);
+                                row_weights[len] = values[lane];
+                            }
+                            len += 1;
+                        }
+                    });
+                    let sum = Vec2::new(sum_x.element_sum(), sum_y.element_sum());
+                    let sum_sq = sum_sq.element_sum();
+                    let mut wall_gradient = Vec2::ZERO;
+                    let mut wall_viscosity = 0.0f32;
+                    let mut wall_count = 0u32;
+                    let mut wall_head = Vec2::ZERO;
+                    walls.points.for_each_batch(x, |_, dx, dy, r2| {
+                        density += w.value_sq_x4(r2);
+                        let inside = r2.cmplt(support_sq) & r2.cmpgt(tiny);
+                        let mask = inside.bitmask();
+                        if mask == 0 {
+                            return;
+                        }
+                        let r2 = r2.min(support_sq);
+                        let slope = g.derivative_over_r_x4(r2.sqrt());
+                        let gx = (-scaled_volume * slope * dx).to_array();
+                        let gy = (-scaled_volume * slope * dy).to_array();
+                        let friction =
+                            (c.volume * slope * r2 / (r2 + Vec4::splat(eta_sq))).to_array();
+                        let head = (Vec4::splat(c.gravity.x) * dx + Vec4::splat(c.gravity.y) * dy)
+                            .to_array();
+                        for lane in 0..4 {
+                            if mask & (1 << lane) != 0 {
+                                let gradient = Vec2::new(gx[lane], gy[lane]);
+                                wall_gradient += gradient;
+                                wall_viscosity += friction[lane];
+                                wall_head -= head[lane] * gradient;
+                                wall_count += 1;
+                            }
+                        }
+                    });
+                    *most = (*most).max(len);
+                    // The row is padded to whole blocks (see `Rows`) with the particle itself at
+                    // zero gradient and weight, which adds nothing to any sum over it.
+                    if len <= stride {
+                        rows.pad(k, len, *start + k);
+                        row_weights[len..len.next_multiple_of(BLOCK)].fill(0.0);
+                    }
+                    // A particle's own stiffness changes its density rate through its own velocity
+                    // (pushed by its neighbours and the mirrored wall) and its neighbours'.
+                    let diagonal = (sum + WALL_MIRROR * wall_gradient).length_squared() + sum_sq;
+                    *state = SlotState {
+                        count: len.min(stride) as u32,
+                        density: c.volume * density.element_sum(),
+                        factor: if diagonal > 1e-6 / c.support_sq {
+                            1.0 / diagonal
+                        } else {
+                            0.0
+                        },
+                        deficient: ((len as u32 + wall_count) as f32) < deficient_below,
+                        wall_gradient,
+                        wall_viscosity,
+                        wall_head,
+                    };
+                }
+            },
+        );
+        jobs.iter().map(|job| job.4).max().unwrap_or(0)
+    }
+
+    /// Replaces the density solve's warm start by its SPH average over each particle's
+    /// neighbourhood (Shepard: `Σⱼ Vⱼ Wᵢⱼ κⱼ / Σⱼ Vⱼ Wᵢⱼ`, the particle included). The pressure
+    /// equations do not see a stiffness that alternates from one particle to the next (on the
+    /// lattice its push is zero), so nothing in the solve removes it; carried from sub-step to
+    /// sub-step by the warm start it grew (measured: ±300 Pa in a resting 0.2 m layer whose
+    /// floor pressure is 1,960 Pa). The average halves it every sub-step and keeps a linear
+    /// field.
+    fn smooth_warm_start(&mut self, c: &SphConstants, parallel: &impl Parallel) {
+        let own = with_kernels!(c.kernel, c.support, |w, _g| c.volume
+            * w.value_sq_x4(Vec4::ZERO).x);
+        let (rows, weights) = (&self.rows, &self.weights);
+        let (state, kappa) = (&self.state, &self.kappa);
+        let stride = rows.stride();
+        let mut smoothed = core::mem::take(&mut self.scratch.delta);
+        smoothed.resize(kappa.len(), 0.0);
+        for_each_slot(&mut smoothed, parallel, |slot, out| {
+            let count = state[slot].count;
+            let (mut sum, mut weight) = (own * kappa[slot], own);
+            let row_weights = &weights[slot * stride..slot * stride + count as usize];
+            for ((j, _), &w) in rows.neighbors(slot, count).zip(row_weights) {
+                sum += w * kappa[j];
+                weight += w;
+            }
+            *out = sum / weight;
+            0.0
+        });
+        core::mem::swap(&mut self.kappa, &mut smoothed);
+        self.scratch.delta = smoothed;
+    }
+
+    /// Step 2: makes the velocity field divergence-free for a step of `dt` seconds (the last
+    /// sub-step's length). Returns the iterations taken.
+    pub fn solve_divergence(&mut self, c: &SphConstants, dt: f32, parallel: &impl Parallel) -> u32 {
+        let settings = c.dfsph;
+        if self.is_empty() || dt <= 0.0 || settings.max_divergence_iterations == 0 {
+            return 0;
+        }
+        let (iterations, error) =
+            self.solve(dt, Target::Divergence, f32::INFINITY, &settings, parallel);
+        self.report.divergence_iterations = iterations;
+        self.report.divergence_error = error;
+        iterations
+    }
+
+    /// Step 4: predicts velocities with the stored accelerations and solves for the pressure
+    /// that keeps the density at rest after a step of `dt` seconds. Returns the iterations.
+    pub fn solve_density(&mut self, c: &SphConstants, dt: f32, parallel: &impl Parallel) -> u32 {
+        if self.is_empty() || dt <= 0.0 {
+            return 0;
+        }
+        let settings = c.dfsph;
+        let mut most = 0.0f32;
+        for (slot, v) in self.velocity.iter_mut().enumerate() {
+            let a = self.acceleration.get(slot);
+            most = most.max(a.length_squared());
+            *v += dt * a;
+        }
+        // A pressure error that pushes a whole column by `δa` shows as a density error of only
+        // `δa dt²/Δx` at its floor: the largest error allowed keeps it under a fraction of the
+        // accelerations the pressure balances, at any depth.
+        let largest = PRESSURE_ACCURACY * most.sqrt() * dt * dt / c.spacing;
+        let (iterations, error) = self.solve(dt, Target::Density, largest, &settings, parallel);
+        self.report.density_iterations = iterations;
+        self.report.density_error = error;
+        iterations
+    }
+
+    /// Gravity plus laminar (Lo & Shao 2002) and artificial (Monaghan) viscosity at sorted
+    /// `slot`, m/s², from the cached neighbours and the divergence-free velocities. Walls add
+    /// laminar friction, as in [`wcsph`](super::wcsph), and the hydrostatic head of their
+    /// mirrored pressure.
+    pub fn non_pressure_acceleration(
+        &self,
+        c: &SphConstants,
+        fluid: &FluidSnapshot,
+        slot: usize,
+    ) -> Vec2 {
+        let s = self.state[slot];
+        let (xi, vi) = (fluid.points.get(slot), self.velocity[slot]);
+        let rho_i = s.density * c.rest_density;
+        let h = c.smoothing_length;
+        let eta_sq = 0.01 * h * h;
+        // m ∇W = ρ₀ g / s.
+        let to_mass_gradient = c.rest_density / c.gradient_scale;
+        let laminar = 4.0 * c.kinematic_viscosity;
+        let artificial = 2.0 * c.artificial_viscosity * c.speed_of_sound * h;
+        let mut a = Vec2::ZERO;
+        for (j, gradient) in self.rows.neighbors(slot, s.count) {
+            let r = xi - fluid.points.get(j);
+            let v = vi - self.velocity[j];
+            let mass_gradient = to_mass_gradient * gradient;
+            let r2 = r.length_squared();
+            let inv = 1.0 / ((r2 + eta_sq) * (rho_i + self.state[j].density * c.rest_density));
+            let approach = v.dot(r).min(0.0);
+            a += (laminar * inv * r.dot(mass_gradient)) * v
+                + (artificial * approach * inv) * mass_gradient;
+        }
+        let wall = laminar * c.rest_density / (rho_i + c.rest_density) * s.wall_viscosity;
+        // The walls mirror a particle's pressure with the hydrostatic head (Adami et al. 2012):
+        // the solves push with the particle's own stiffness (`2κᵢ g_wall`), the head follows
+        // here for particles within the fluid (a full neighbourhood), not for spray. (Switched
+        // by the last sub-step's pressure instead, it flickered on and off along the floor and
+        // set the bottom row bouncing.)
+        let head = if s.deficient { Vec2::ZERO } else { s.wall_head };
+        a + wall * vi + head + c.gravity
+    }
+
+    /// The largest stable step (s) for the fastest particle after the divergence solve and the
+    /// largest acceleration `max_acceleration` (m/s²): the flow's CFL limit `C Δx / v_max`, the
+    /// force limit `¼√(h/a)`, the viscous limit `⅛h²/ν` for the laminar viscosity plus the
+    /// artificial one (`ν ≈ α c₀ h / 8` in 2D), and the settings' longest step.
+    pub fn stable_time_step(&self, c: &SphConstants, max_acceleration: f32) -> f32 {
+        let largest_stiffness = self.kappa.iter().fold(0.0f32, |a, &k| a.max(k));
+        let speed = max_length(&self.velocity).max(pressure_speed(largest_stiffness));
+        stable_time_step(c, speed, max_acceleration)
+    }
+
+    /// Stores the acceleration (m/s²) of the particle at sorted `slot` for
+    /// [`solve_density`](Self::solve_density); safe to call from parallel loops (one slot each).
+    #[inline]
+    pub fn set_acceleration(&self, slot: usize, acceleration: Vec2) {
+        self.acceleration.set(slot, acceleration);
+    }
+
+    /// Velocity at sorted `slot`, m/s: divergence-free after step 2, solved after step 4.
+    #[inline]
+    pub fn velocity(&self, slot: usize) -> Vec2 {
+        self.velocity[slot]
+    }
+
+    /// Summed density at sorted `slot`, kg/m³.
+    #[inline]
+    pub fn density(&self, c: &SphConstants, slot: usize) -> f32 {
+        self.state[slot].density * c.rest_density
+    }
+
+    /// Stiffness `[κ, κᵛ]` at sorted `slot` (m²/s²), to warm-start the next sub-step.
+    #[inline]
+    pub fn stiffness(&self, slot: usize) -> Vec2 {
+        Vec2::new(self.kappa[slot], self.kappa_divergence[slot])
+    }
+
+    /// Pressure at sorted `slot`, Pa: `ρ₀ κ`, the density solve's pressure, which holds the
+    /// fluid at rest density (the divergence solve's `κᵛ` is a velocity correction of its own
+    /// and is not counted).
+    #[inline]
+    pub fn pressure(&self, c: &SphConstants, slot: usize) -> f32 {
+        c.rest_density * self.kappa[slot]
+    }
+}
+
+/// The speed (m/s) a particle reaches from rest when a stiffness `κ = p/ρ₀` (m²/s²) is released
+/// (Bernoulli: `√(2p/ρ₀)`). The flow's CFL limit takes it as a speed the fluid can have: the
+/// pressure force on a particle depends on where its neighbours are, with a stiffness that grows
+/// with the pressure, and the explicit move of the positions is stable only while a step is short
+/// against `Δx/√(2κ)` (measured: a layer 25 particles deep at 4 mm spacing boiled at 4 ms steps,
+/// with its fastest particle at 44% of `√(gD)`, and settled at this limit's 2 ms).
+pub(crate) fn pressure_speed(stiffness: f32) -> f32 {
+    (2.0 * stiffness.max(0.0)).sqrt()
+}
+
+/// The step the divergence solve makes the velocities divergence-free for: the last sub-step's
+/// length, or on the first sub-step the flow's limit at the current speed (both drivers use it).
+pub(crate) fn divergence_step(clock: &SubstepClock, c: &SphConstants, max_speed: f32) -> f32 {
+    if clock.dt > 0.0 {
+        clock.dt
+    } else {
+        stable_time_step(c, max_speed, 0.0)
+    }
+}
+
+/// The stable DFSPH step for a fastest speed (m/s) and largest acceleration (m/s²); see
+/// [`Dfsph::stable_time_step`].
+pub fn stable_time_step(c: &SphConstants, max_speed: f32, max_acceleration: f32) -> f32 {
+    let h = c.smoothing_length;
+    let mut dt = c.dfsph.max_time_step;
+    if max_speed > 0.0 {
+        dt = dt.min(c.dfsph.cfl_number * c.spacing / max_speed);
+    }
+    if max_acceleration > 0.0 {
+        dt = dt.min(0.25 * (h / max_acceleration).sqrt());
+    }
+    let viscosity = c.kinematic_viscosity + c.artificial_viscosity * c.speed_of_sound * h / 8.0;
+    if viscosity > 0.0 {
+        dt = dt.min(0.125 * h * h / viscosity);
+    }
+    dt
+}
+
+/// Neighbours (the particle itself not counted) of an interior particle of the rest lattice.
+fn lattice_neighbors(c: &SphConstants) -> u32 {
+    let reach = (c.support / c.spacing).ceil() as i32;
+    let mut count = 0;
+    for j in -reach..=reach {
+        for i in -reach..=reach {
+            let r2 = ((i * i + j * j) as f32) * c.spacing * c.spacing;
+            if r2 > 0.0 && r2 < c.support_sq {
+                count += 1;
+            }
+        }
+    }
+    count
+}
+
+/// The largest eigenvalue `λ_max` of the DFSPH pressure operator scaled by its diagonal on the
+/// interior of the rest lattice: with a stiffness wave `κ = e^{ik·x}`, the operator is
+/// `|S(k)|²` with `S(k) = Σⱼ gⱼ sin(k·dⱼ)` over the neighbour offsets `dⱼ`, the diagonal `Σⱼ |gⱼ|²`.
+/// It is above 2 in 2D (about 2.5 for the Wendland kernel at 2.5 spacings, 3.3 at 3), so the
+/// plain Jacobi update of Bender & Koschier diverges here (measured); the solve's projected
+/// gradient steps take `1/λ_max`.
+fn lattice_spectral_radius<G: RadialKernel>(g: &G, c: &SphConstants) -> f32 {
+    let reach = (c.support / c.spacing).ceil() as i32;
+    let mut offsets = Vec::new();
+    for j in -reach..=reach {
+        for i in -reach..=reach {
+            let d = Vec2::new(i as f32, j as f32) * c.spacing;
+            let r2 = d.length_squared();
+            if r2 > 0.0 && r2 < c.support_sq {
+                offsets.push((d, g.derivative_over_r(r2.sqrt()) * d));
+            }
+        }
+    }
+    let diagonal: f32 = offsets.iter().map(|(_, g)| g.length_squared()).sum();
+    if diagonal <= 0.0 {
+        return 1.0;
+    }
+    const SAMPLES: usize = 48;
+    let mut largest = 0.0f32;
+    for a in 0..=SAMPLES {
+        for b in 0..=SAMPLES {
+            let k = Vec2::new(a as f32, b as f32)
+                * (core::f32::consts::PI / (SAMPLES as f32 * c.spacing));
+            let s: Vec2 = offsets.iter().map(|&(d, g)| k.dot(d).sin() * g).sum();
+            largest = largest.max(s.length_squared() / diagonal);
+        }
+    }
+    largest
+}
+
+/// `Σⱼ (xᵢ + xⱼ) gᵢⱼ + 2 xᵢ g_wall,ᵢ`: the pressure acceleration of stiffness `x` on particle
+/// `slot`, per unit stiffness (walls mirror the particle's own stiffness, [`WALL_MIRROR`]).
+#[inline(always)]
+fn pressure_push(rows: &Rows, simd: Simd, s: &SlotState, slot: usize, x: &[f32]) -> Vec2 {
+    let own = x[slot];
+    WALL_MIRROR * own * s.wall_gradient + rows.row(slot, s.count).push(simd, x, own)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fluid::{PressureSolver, SphParams};
+    use crate::sim::parallel::Sequential;
+
+    /// Particles on a square lattice of `n × n`, spacing `dx`, and the solver prepared on them.
+    fn lattice(
+        n: usize,
+        params: &SphParams,
+        stiffness: impl Fn(Vec2) -> Vec2 + Sync,
+    ) -> (SphConstants, FluidSnapshot, Dfsph) {
+        let c = params.constants().unwrap();
+        let dx = params.particle_spacing;
+        let points: Vec<Vec2> = (0..n * n)
+            .map(|k| Vec2::new((k % n) as f32 + 0.5, (k / n) as f32 + 0.5) * dx)
+            .collect();
+        let mut fluid = FluidSnapshot::default();
+        fluid.rebuild(&c, &points, &vec![Vec2::ZERO; points.len()], &Sequential);
+        let mut dfsph = Dfsph::default();
+        let walls = Walls::default();
+        let order = fluid.grid().order().to_vec();
+        dfsph.prepare(
+            &c,
+            &fluid,
+            &walls,
+            |slot| stiffness(points[order[slot] as usize]),
+            &Sequential,
+        );
+        (c, fluid, dfsph)
+    }
+
+    #[test]
+    fn one_solve_from_rest_gives_hydrostatic_pressure() {
+        use crate::sim::boundary::Tank;
+        let (w, d) = (0.2f32, 0.2f32);
+        let mut p = params();
+        p.tank = Some(Tank::new(w, 0.3));
+        p.dfsph.density_tolerance = 1e-6;
+        p.dfsph.max_density_iterations = 2000;
+        let c = p.constants().unwrap();
+        let dx = p.particle_spacing;
+        let (nx, ny) = ((w / dx) as usize, (d / dx) as usize);
+        let points: Vec<Vec2> = (0..nx * ny)
+            .map(|k| Vec2::new((k % nx) as f32 + 0.5, (k / nx) as f32 + 0.5) * dx)
+            .collect();
+        let mut fluid = FluidSnapshot::default();
+        fluid.rebuild(&c, &points, &vec![Vec2::ZERO; points.len()], &Sequential);
+        let mut walls = Walls::default();
+        walls.rebuild(&c, &[]);
+        let mut dfsph = Dfsph::default();
+        dfsph.prepare(&c, &fluid, &walls, |_| Vec2::ZERO, &Sequential);
+        for slot in 0..fluid.len() {
+            let a = dfsph.non_pressure_acceleration(&c, &fluid, slot);
+            dfsph.set_acceleration(slot, a);
+        }
+        let dt = 0.004;
+        let iterations = dfsph.solve_density(&c, dt, &Sequential);
+        assert!(dfsph.report.density_error <= 1e-6, "{:?}", dfsph.report);
+        // The free surface sits half a spacing above the top row.
+        let surface = d - 0.5 * dx;
+        for y in [0.015f32, 0.055, 0.105, 0.155] {
+            let slot = (0..fluid.len())
+                .min_by(|&a, &b| {
+                    let q = |s: usize| (fluid.points.get(s) - Vec2::new(0.105, y)).length();
+                    q(a).total_cmp(&q(b))
+                })
+                .unwrap();
+            let (p, v) = (dfsph.pressure(&c, slot), dfsph.velocity(slot));
+            let hydrostatic = 1000.0 * 9.81 * (surface - y);
+            assert!(
+                (p - hydrostatic).abs() < 0.1 * hydrostatic + 30.0 && v.length() < 0.005,
+                "at y = {y} m after {iterations} iterations: p = {p} Pa (ρ₀g(d−y) = \
+                 {hydrostatic} Pa), v = {v} m/s"
+            );
+        }
+    }
+
+    fn params() -> SphParams {
+        SphParams {
+            solver: PressureSolver::Dfsph,
+            support_ratio: 2.5,
+            particle_spacing: 0.01,
+            tank: None,
+            ..SphParams::water()
+        }
+    }
+
+    #[test]
+    fn interior_density_is_rest_density() {
+        let (c, fluid, dfsph) = lattice(20, &params(), |_| Vec2::ZERO);
+        let centre = (0..fluid.len())
+            .min_by(|&a, &b| {
+                let d = |s: usize| (fluid.points.get(s) - Vec2::splat(0.1)).length();
+                d(a).total_cmp(&d(b))
+            })
+            .unwrap();
+        assert!((dfsph.density(&c, centre) / c.rest_density - 1.0).abs() < 1e-4);
+    }
+
+    #[test]
+    fn pressure_of_a_linear_stiffness_field_is_its_gradient() {
+        let slope = 3.0;
+        let (_, fluid, mut dfsph) = lattice(20, &params(), |x| Vec2::new(slope * x.y, 0.0));
+        let delta = dfsph.kappa.clone();
+        let mut kappa = vec![0.0; delta.len()];
+        dfsph.push(1.0, &delta, &mut kappa);
+        let centre = (0..fluid.len())
+            .min_by(|&a, &b| {
+                let d = |s: usize| (fluid.points.get(s) - Vec2::splat(0.1)).length();
+                d(a).total_cmp(&d(b))
+            })
+            .unwrap();
+        let v = dfsph.velocity(centre);
+        assert!(
+            (v.y / -slope - 1.0).abs() < 0.01 && v.x.abs() < 1e-3,
+            "pressure acceleration {v} for ∇κ = (0, {slope})"
+        );
+    }
+}

@@ -1,0 +1,109 @@
+//! The divergence-free solver's part of the stages of a sub-step ([`step`](crate::sim::step)),
+//! in the order of the module docs of [`dfsph`](super).
+
+use super::{Dfsph, divergence_step};
+use crate::sim::integrate::move_particle;
+use crate::sim::parallel::{Parallel, for_each_slot};
+use crate::sim::step::{Particles, PressureStages, Shared, for_each_pair};
+use bevy::math::Vec2;
+
+impl PressureStages for Dfsph {
+    /// Steps 1 and 2: caches neighbours and gradients, sums densities and factors (warm-started
+    /// from each particle's stiffness), then makes the velocity field divergence-free.
+    fn density(&mut self, s: &mut Shared, particles: &Particles, parallel: &impl Parallel) {
+        let c = s.constants;
+        let (order, stiffness) = (s.snapshot.grid().order(), &particles.stiffness);
+        self.prepare(
+            &c,
+            &s.snapshot,
+            &s.walls,
+            |slot| stiffness[order[slot] as usize],
+            parallel,
+        );
+        let dt = divergence_step(&s.clock, &c, s.snapshot.max_speed);
+        let iterations = self.solve_divergence(&c, dt, parallel);
+        s.iterations.divergence += iterations;
+        s.iterations.total += iterations as u64;
+    }
+
+    /// Step 3, the solver's part: gravity and viscosity by sorted slot, then each particle's
+    /// acceleration, divergence-free velocity and density.
+    fn forces(&mut self, s: &mut Shared, particles: &mut Particles, parallel: &impl Parallel) {
+        let c = s.constants;
+        let n = self.len();
+        s.accelerations.resize(n, Vec2::ZERO);
+        let snapshot = &s.snapshot;
+        let dfsph = &*self;
+        for_each_slot(&mut s.accelerations, parallel, |slot, a| {
+            *a = dfsph.non_pressure_acceleration(&c, snapshot, slot);
+            0.0
+        });
+        let (slot_of, accelerations) = (snapshot.grid().slot_of(), &s.accelerations);
+        for_each_pair(
+            &mut particles.acceleration,
+            &mut particles.velocity,
+            parallel,
+            |i, a, v| {
+                let slot = slot_of[i] as usize;
+                *a = accelerations[slot];
+                *v = dfsph.velocity(slot);
+                0
+            },
+        );
+        for_each_slot(&mut particles.density, parallel, |i, rho| {
+            *rho = dfsph.density(&c, slot_of[i] as usize);
+            0.0
+        });
+    }
+
+    fn step_limit(&self, s: &Shared, max_acceleration: f32) -> f32 {
+        self.stable_time_step(&s.constants, max_acceleration)
+    }
+
+    /// Steps 4 and 5: the density solve under every particle's acceleration (external forces
+    /// included), then each particle moves with its solved velocity and keeps its pressure and
+    /// stiffness.
+    fn integrate(
+        &mut self,
+        s: &mut Shared,
+        particles: &mut Particles,
+        dt: f32,
+        parallel: &impl Parallel,
+    ) -> u64 {
+        let c = s.constants;
+        let (order, slot_of) = (s.snapshot.grid().order(), s.snapshot.grid().slot_of());
+        for (slot, &index) in order.iter().enumerate().take(self.len()) {
+            self.set_acceleration(slot, particles.acceleration[index as usize]);
+        }
+        let iterations = self.solve_density(&c, dt, parallel);
+        s.iterations.density += iterations;
+        s.iterations.total += iterations as u64;
+        s.iterations.total_density += iterations as u64;
+        let (dfsph, obstacles) = (&*self, &s.walls.obstacles);
+        let held_back = for_each_pair(
+            &mut particles.position,
+            &mut particles.velocity,
+            parallel,
+            |i, x, v| {
+                let solved = dfsph.velocity(slot_of[i] as usize);
+                u64::from(!move_particle(&c, obstacles, x, v, solved, dt))
+            },
+        );
+        for_each_pair(
+            &mut particles.density,
+            &mut particles.pressure,
+            parallel,
+            |i, rho, p| {
+                let slot = slot_of[i] as usize;
+                *rho = dfsph.density(&c, slot);
+                *p = dfsph.pressure(&c, slot);
+                0
+            },
+        );
+        for_each_slot(&mut particles.stiffness, parallel, |i, k| {
+            *k = dfsph.stiffness(slot_of[i] as usize);
+            0.0
+        });
+        held_back
+    }
+}

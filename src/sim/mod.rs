@@ -1,0 +1,32 @@
+//! The pure simulation core: every algorithm of the fluid and of gravity over plain vectors,
+//! with no ECS. It imports nothing from Bevy but `bevy::math` (and `Reflect` derives on the
+//! types that are parameters) and nothing from the rest of the crate; `.ci/run` checks both.
+//! The Bevy plugins ([`fluid`](crate::fluid), [`gravity`](crate::gravity)) are drivers of it,
+//! and so is [`world`], the plain-vector fluid the benchmarks and tests run.
+//!
+//! - [`config`]: the constants and settings the passes read.
+//! - [`kernels`], [`grid`], [`layout`]: smoothing kernels, the cell grid, the cell-sorted
+//!   snapshot, the walls and the neighbour lists.
+//! - [`boundary`], [`region`]: the tank, solid shapes, and regions for drains and sensors.
+//! - [`density`], [`integrate`]: summation density and the particle integrator.
+//! - [`wcsph`], [`dfsph`]: the two pressure solvers.
+//! - [`step`]: the one order of a sub-step, which both drivers call.
+//! - [`clock`], [`parallel`]: the sub-step clock and the slot passes over threads.
+//! - [`simd`], [`gravity`]: SIMD dispatch and the Barnes-Hut tree with its sums.
+
+pub mod boundary;
+pub mod clock;
+pub mod config;
+pub mod density;
+pub mod dfsph;
+pub mod gravity;
+pub mod grid;
+pub mod integrate;
+pub mod kernels;
+pub mod layout;
+pub mod parallel;
+pub mod region;
+pub mod simd;
+pub mod step;
+pub mod wcsph;
+pub mod world;

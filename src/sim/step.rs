@@ -1,0 +1,428 @@
+//! The one order of a fluid sub-step. Both drivers call it: the plain-vector world
+//! ([`world`](super::world)) runs [`FluidStep::substep`], and the ECS driver runs the same
+//! [`Stage`]s one by one (with the game's force hooks between [`Stage::Forces`] and
+//! [`Stage::Integrate`]), so the two cannot drift.
+//!
+//! A sub-step works on the fluid's [`Particles`] (by the driver's index) and on the
+//! [`FluidStep`] (the cell-sorted snapshot, the walls, the clock and the pressure solver's own
+//! state, by sorted slot). Each pressure solver fills in its part of the stages through
+//! [`PressureStages`]; the solvers are listed once, in [`SolverState`], whose exhaustive
+//! `match` is the one place a new solver is added.
+
+use super::boundary::Shape;
+use super::clock::SubstepClock;
+use super::config::{PressureSolver, SphConstants};
+use super::density::{max_length, mean_neighbors, with_kernels};
+use super::dfsph::Dfsph;
+use super::integrate::advance_particle;
+use super::kernels::RadialKernel;
+use super::layout::{FluidSnapshot, Walls};
+use super::parallel::{CHUNK, Parallel, run_jobs};
+use super::wcsph::Wcsph;
+use bevy::math::Vec2;
+
+/// The fluid's particles as a structure of arrays, by the driver's index (the world's vector
+/// order, the ECS query's order).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Particles {
+    /// Positions, m.
+    pub position: Vec<Vec2>,
+    /// Velocities, m/s.
+    pub velocity: Vec<Vec2>,
+    /// Accelerations of the last sub-step, m/s² (DFSPH: without pressure).
+    pub acceleration: Vec<Vec2>,
+    /// Densities, kg/m³.
+    pub density: Vec<f32>,
+    /// Pressures, Pa.
+    pub pressure: Vec<f32>,
+    /// DFSPH stiffness `[κ, κᵛ]`, m²/s², carried to the next sub-step.
+    pub stiffness: Vec<Vec2>,
+}
+
+impl Particles {
+    /// Particles at rest at `positions`, at `rest_density`.
+    pub fn at_rest(positions: Vec<Vec2>, rest_density: f32) -> Self {
+        let n = positions.len();
+        Self {
+            position: positions,
+            velocity: vec![Vec2::ZERO; n],
+            acceleration: vec![Vec2::ZERO; n],
+            density: vec![rest_density; n],
+            pressure: vec![0.0; n],
+            stiffness: vec![Vec2::ZERO; n],
+        }
+    }
+
+    /// Number of particles.
+    pub fn len(&self) -> usize {
+        self.position.len()
+    }
+
+    /// Whether there are no particles.
+    pub fn is_empty(&self) -> bool {
+        self.position.is_empty()
+    }
+
+    /// Empties every array, keeping their memory.
+    pub fn clear(&mut self) {
+        self.position.clear();
+        self.velocity.clear();
+        self.acceleration.clear();
+        self.density.clear();
+        self.pressure.clear();
+        self.stiffness.clear();
+    }
+
+    /// Appends one particle.
+    pub fn push(&mut self, position: Vec2, velocity: Vec2, stiffness: Vec2, rest_density: f32) {
+        self.position.push(position);
+        self.velocity.push(velocity);
+        self.acceleration.push(Vec2::ZERO);
+        self.density.push(rest_density);
+        self.pressure.push(0.0);
+        self.stiffness.push(stiffness);
+    }
+}
+
+/// The stages of one sub-step, in order ([`Stage::ALL`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Stage {
+    /// The cell grid and the sorted snapshot from the particles' positions and velocities.
+    Neighbors,
+    /// WCSPH: density, pressure, wall pressure. DFSPH: cached neighbours, densities and
+    /// factors, then the divergence-free solve.
+    Density,
+    /// Accelerations into [`Particles::acceleration`] (WCSPH: pressure, viscosity, gravity;
+    /// DFSPH: viscosity and gravity), with the densities, pressures and (DFSPH) the
+    /// divergence-free velocities. A driver adds its external forces after it.
+    Forces,
+    /// The step length, then (DFSPH) the density solve under every acceleration, and the move.
+    Integrate,
+}
+
+impl Stage {
+    /// Every stage, in the order of a sub-step.
+    pub const ALL: [Stage; 4] = [
+        Self::Neighbors,
+        Self::Density,
+        Self::Forces,
+        Self::Integrate,
+    ];
+}
+
+/// How a sub-step's length is taken from the stability limit.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StepLength {
+    /// Within the current tick of the clock ([`SubstepClock::take_substep`]).
+    InTick,
+    /// The longest stable step, outside any tick ([`SubstepClock::take_free_substep`]).
+    Free,
+}
+
+/// Iterations of the pressure solves, counted over ticks.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct SolverIterations {
+    /// Density-solve iterations in the current (or last) tick.
+    pub density: u32,
+    /// Divergence-solve iterations in the current (or last) tick.
+    pub divergence: u32,
+    /// Iterations of both solves since start-up.
+    pub total: u64,
+    /// Of those, the density solve's.
+    pub total_density: u64,
+}
+
+/// What every pressure solver's stages share: the constants, the sorted snapshot, the walls,
+/// the accelerations by sorted slot and the clock.
+#[derive(Debug, Clone)]
+pub struct Shared {
+    /// The constants the sub-steps run on.
+    pub constants: SphConstants,
+    /// The cell-sorted snapshot of the current sub-step.
+    pub snapshot: FluidSnapshot,
+    /// The tank's and the solids' boundary particles.
+    pub walls: Walls,
+    /// Accelerations by sorted slot from the force stage.
+    pub accelerations: Vec<Vec2>,
+    /// The sub-step clock.
+    pub clock: SubstepClock,
+    /// Solver iterations.
+    pub iterations: SolverIterations,
+    /// Particle updates held back because they would not have been finite.
+    pub non_finite: u64,
+}
+
+/// A pressure solver's part of the stages of [`Stage`] (the shared parts, the snapshot and the
+/// step length, are [`FluidStep`]'s).
+pub trait PressureStages {
+    /// [`Stage::Density`].
+    fn density(&mut self, s: &mut Shared, particles: &Particles, parallel: &impl Parallel);
+
+    /// [`Stage::Forces`]: fills `s.accelerations` by slot, and writes each particle's
+    /// acceleration, density and pressure (and, if the solver changed them, velocity).
+    fn forces(&mut self, s: &mut Shared, particles: &mut Particles, parallel: &impl Parallel);
+
+    /// The longest stable step (s) under the largest acceleration, m/s².
+    fn step_limit(&self, s: &Shared, max_acceleration: f32) -> f32;
+
+    /// [`Stage::Integrate`] after the step `dt` is chosen: moves every particle (and stores
+    /// its pressure and stiffness); returns how many updates were held back as not finite.
+    fn integrate(
+        &mut self,
+        s: &mut Shared,
+        particles: &mut Particles,
+        dt: f32,
+        parallel: &impl Parallel,
+    ) -> u64;
+}
+
+/// Each pressure solver's own state; the one list of solvers.
+#[derive(Debug, Clone)]
+pub enum SolverState {
+    /// [`PressureSolver::Wcsph`].
+    Wcsph(Wcsph),
+    /// [`PressureSolver::Dfsph`].
+    Dfsph(Box<Dfsph>),
+}
+
+impl SolverState {
+    /// Fresh state for `solver`.
+    pub fn new(solver: PressureSolver) -> Self {
+        match solver {
+            PressureSolver::Wcsph => Self::Wcsph(Wcsph::default()),
+            PressureSolver::Dfsph => Self::Dfsph(Box::default()),
+        }
+    }
+
+    /// The solver this is the state of.
+    pub fn kind(&self) -> PressureSolver {
+        match self {
+            Self::Wcsph(_) => PressureSolver::Wcsph,
+            Self::Dfsph(_) => PressureSolver::Dfsph,
+        }
+    }
+}
+
+/// Runs `$body` with `$solver` bound to the state of the solver in use, as a
+/// [`PressureStages`].
+macro_rules! with_solver {
+    ($state:expr, |$solver:ident| $body:expr) => {
+        match $state {
+            SolverState::Wcsph($solver) => $body,
+            SolverState::Dfsph($solver) => {
+                let $solver = &mut **$solver;
+                $body
+            }
+        }
+    };
+}
+
+/// The state of the sub-steps that both drivers share (see the module docs).
+#[derive(Debug, Clone)]
+pub struct FluidStep {
+    /// What every solver's stages share.
+    pub shared: Shared,
+    /// The pressure solver's own state.
+    pub solver: SolverState,
+}
+
+impl FluidStep {
+    /// A step with `constants` and no walls yet ([`FluidStep::rebuild_walls`]).
+    pub fn new(constants: SphConstants) -> Self {
+        Self {
+            shared: Shared {
+                constants,
+                snapshot: FluidSnapshot::default(),
+                walls: Walls::default(),
+                accelerations: Vec::new(),
+                clock: SubstepClock::default(),
+                iterations: SolverIterations::default(),
+                non_finite: 0,
+            },
+            solver: SolverState::new(constants.solver),
+        }
+    }
+
+    /// The constants in use.
+    pub fn constants(&self) -> &SphConstants {
+        &self.shared.constants
+    }
+
+    /// Takes new constants; a change of solver starts that solver's state afresh.
+    pub fn set_constants(&mut self, constants: SphConstants) {
+        self.shared.constants = constants;
+        if self.solver.kind() != constants.solver {
+            self.solver = SolverState::new(constants.solver);
+        }
+    }
+
+    /// Re-samples the wall particles of the tank and `shapes`.
+    pub fn rebuild_walls(&mut self, shapes: &[Shape]) {
+        let s = &mut self.shared;
+        s.walls.rebuild(&s.constants, shapes);
+    }
+
+    /// The divergence-free solver's state, when it is the solver in use.
+    pub fn dfsph(&self) -> Option<&Dfsph> {
+        match &self.solver {
+            SolverState::Dfsph(dfsph) => Some(dfsph),
+            SolverState::Wcsph(_) => None,
+        }
+    }
+
+    /// Mean number of particles (fluid and wall, the particle itself included) within the
+    /// kernel support of each fluid particle, as of the last sub-step.
+    pub fn mean_neighbors(&self) -> f64 {
+        let s = &self.shared;
+        mean_neighbors(&s.constants, &s.snapshot, &s.walls)
+    }
+
+    /// One whole sub-step: every [`Stage`] in order. Returns its length, s.
+    pub fn substep(
+        &mut self,
+        particles: &mut Particles,
+        length: StepLength,
+        parallel: &impl Parallel,
+    ) -> f32 {
+        for stage in Stage::ALL {
+            self.stage(stage, particles, length, parallel);
+        }
+        self.shared.clock.dt
+    }
+
+    /// One stage of a sub-step.
+    pub fn stage(
+        &mut self,
+        stage: Stage,
+        particles: &mut Particles,
+        length: StepLength,
+        parallel: &impl Parallel,
+    ) {
+        let s = &mut self.shared;
+        match stage {
+            Stage::Neighbors => {
+                let c = s.constants;
+                s.snapshot
+                    .rebuild(&c, &particles.position, &particles.velocity, parallel);
+            }
+            Stage::Density => with_solver!(&mut self.solver, |solver| solver
+                .density(s, particles, parallel)),
+            Stage::Forces => with_solver!(&mut self.solver, |solver| solver
+                .forces(s, particles, parallel)),
+            Stage::Integrate => {
+                let max_acceleration = max_length(&particles.acceleration);
+                let stable = with_solver!(&mut self.solver, |solver| solver
+                    .step_limit(s, max_acceleration));
+                s.clock.max_acceleration = max_acceleration;
+                let empty = particles.is_empty();
+                let max_substeps = s.constants.max_substeps;
+                let dt = match length {
+                    StepLength::InTick => s.clock.take_substep(stable, max_substeps, empty),
+                    StepLength::Free => s.clock.take_free_substep(stable),
+                };
+                let held_back = with_solver!(&mut self.solver, |solver| solver
+                    .integrate(s, particles, dt, parallel));
+                s.non_finite += held_back;
+            }
+        }
+    }
+
+    /// Advances one particle that was not in this sub-step's snapshot (a driver's particle
+    /// spawned between stages) by the sub-step's `dt` with its own acceleration. Returns
+    /// `false` if the update was held back as not finite.
+    pub fn advance_outsider(&self, position: &mut Vec2, velocity: &mut Vec2, a: Vec2) -> bool {
+        let s = &self.shared;
+        advance_particle(
+            &s.constants,
+            &s.walls.obstacles,
+            position,
+            velocity,
+            a,
+            s.clock.dt,
+        )
+    }
+
+    /// The fluid's density, velocity and pressure at `x` (m), interpolated from the particles of
+    /// the last sub-step within one kernel support by Shepard's normalised sum; with `head`,
+    /// each particle's pressure carried to `x` hydrostatically (as a wall takes it). `None`
+    /// where no particle is that close. Returns `(density, velocity, pressure, weight)`, the
+    /// weight being `Σ W`.
+    pub fn sample(&self, x: Vec2, head: bool) -> Option<(f32, Vec2, f32, f32)> {
+        let s = &self.shared;
+        let (c, snapshot) = (&s.constants, &s.snapshot);
+        if snapshot.is_empty() || !x.is_finite() {
+            return None;
+        }
+        let n = snapshot.len();
+        let dfsph = self.dfsph().filter(|dfsph| dfsph.len() == n);
+        let at = |slot: usize| -> (f32, f32, Vec2) {
+            let [px, py, vx, vy] = snapshot.kinematics[slot];
+            let (density, pressure, velocity) = match dfsph {
+                Some(dfsph) => (
+                    dfsph.density(c, slot),
+                    dfsph.pressure(c, slot),
+                    dfsph.velocity(slot),
+                ),
+                None => {
+                    let (density, term) = snapshot.pressure.get(slot);
+                    (density, term * density * density, Vec2::new(vx, vy))
+                }
+            };
+            let carried = if head {
+                density * c.gravity.dot(x - Vec2::new(px, py))
+            } else {
+                0.0
+            };
+            (density, pressure + carried, velocity)
+        };
+        let (mut weight, mut density, mut pressure, mut velocity) =
+            (0.0f32, 0.0f32, 0.0f32, Vec2::ZERO);
+        with_kernels!(c.kernel, c.support, |w, _g| {
+            snapshot.points.for_each_batch(x, |first, _dx, _dy, r2| {
+                let values = w.value_sq_x4(r2).to_array();
+                for (lane, &value) in values.iter().enumerate() {
+                    let slot = first + lane;
+                    if value > 0.0 && slot < n {
+                        let (rho, p, v) = at(slot);
+                        weight += value;
+                        density += value * rho;
+                        pressure += value * p;
+                        velocity += value * v;
+                    }
+                }
+            });
+        });
+        (weight > 0.0).then(|| {
+            (
+                density / weight,
+                velocity / weight,
+                pressure / weight,
+                weight,
+            )
+        })
+    }
+}
+
+/// Runs `work(index, &mut a[index], &mut b[index])` for every index, in parallel chunks of
+/// [`CHUNK`], and returns the sum of what it returns (a count), the same on any number of
+/// threads.
+pub(crate) fn for_each_pair<A: Send, B: Send>(
+    a: &mut [A],
+    b: &mut [B],
+    parallel: &impl Parallel,
+    work: impl Fn(usize, &mut A, &mut B) -> u64 + Sync,
+) -> u64 {
+    let n = a.len().min(b.len());
+    let mut jobs: Vec<_> = a[..n]
+        .chunks_mut(CHUNK)
+        .zip(b[..n].chunks_mut(CHUNK))
+        .enumerate()
+        .map(|(k, (a, b))| (k * CHUNK, a, b, 0u64))
+        .collect();
+    run_jobs(parallel, n, &mut jobs, |(start, a, b, count)| {
+        for (k, (a, b)) in a.iter_mut().zip(b.iter_mut()).enumerate() {
+            *count += work(*start + k, a, b);
+        }
+    });
+    jobs.iter().map(|job| job.3).sum()
+}

@@ -1,0 +1,91 @@
+//! The ECS path and the plain-slice solver compute the same numbers, bit for bit.
+
+use crate::common::*;
+use bevy::prelude::*;
+use bevy_sph2d::fluid::SliceFluid;
+use bevy_sph2d::fluid::{KernelKind, Obstacle, PressureSolver, SphParams, Tank};
+use bevy_sph2d::gameplay::FluidBlock;
+
+fn check(kernel: KernelKind, base: SphParams) {
+    let params = SphParams {
+        particle_spacing: 0.01,
+        kernel,
+        tank: Some(Tank::new(0.6, 0.4)),
+        speed_of_sound: SphParams::speed_of_sound_for_height(0.2),
+        ..base
+    };
+    let block = FluidBlock::dam_break(0.15, 0.2)
+        .with_seed(3)
+        .with_jitter(0.1);
+    let obstacle = Obstacle::circle(Vec2::new(0.35, 0.05), 0.04);
+
+    let mut app = create_app(params.clone());
+    app.world_mut().spawn(obstacle);
+    let ids = spawn(&mut app, block);
+    run(&mut app, 20);
+    let ecs = states(&mut app);
+
+    let mut fluid = SliceFluid::new(
+        params.constants().unwrap(),
+        block.positions_for(&params),
+        &[obstacle.0],
+    );
+    for _ in 0..20 {
+        fluid.advance(TICK);
+    }
+    assert_eq!(ecs.len(), ids.len());
+    assert!(
+        (sim_time(&app) - fluid.clock().time).abs() < 1e-12,
+        "ecs time {} slices time {}, substeps {}",
+        sim_time(&app),
+        fluid.clock().time,
+        fluid.clock().total_substeps
+    );
+    assert!(
+        fluid.clock().total_substeps > 20,
+        "sub-stepping expected, got {}",
+        fluid.clock().total_substeps
+    );
+    let mut moved = 0.0f32;
+    for (i, s) in ecs.iter().enumerate() {
+        assert_eq!(s.position, fluid.position[i], "particle {i} position");
+        assert_eq!(s.velocity, fluid.velocity[i], "particle {i} velocity");
+        assert_eq!(s.density, fluid.density[i], "particle {i} density");
+        assert_eq!(s.pressure, fluid.pressure[i], "particle {i} pressure");
+        assert_eq!(
+            s.acceleration, fluid.acceleration[i],
+            "particle {i} acceleration"
+        );
+        moved = moved.max(s.velocity.length());
+    }
+    assert!(
+        moved > 0.1,
+        "the column should be collapsing, max speed {moved}"
+    );
+}
+
+#[test]
+fn ecs_matches_slices_wendland() {
+    check(KernelKind::WendlandC2, SphParams::water_wcsph());
+}
+
+#[test]
+fn ecs_matches_slices_muller() {
+    check(KernelKind::Muller, SphParams::water_wcsph());
+}
+
+#[test]
+fn ecs_matches_slices_dfsph_wendland() {
+    check(KernelKind::WendlandC2, dfsph());
+}
+
+#[test]
+fn ecs_matches_slices_dfsph_cubic() {
+    check(KernelKind::CubicSpline, dfsph());
+}
+
+fn dfsph() -> SphParams {
+    let params = SphParams::water();
+    assert_eq!(params.solver, PressureSolver::Dfsph);
+    params
+}

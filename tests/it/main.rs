@@ -1,0 +1,16 @@
+//! The headless integration tests, as one binary: every test module links Bevy once, instead of
+//! once per file. `tests/window.rs`, which needs a window and its own `main`, stays apart.
+
+mod common;
+
+mod controls;
+mod determinism;
+mod ecs_matches_slices;
+mod gravity;
+mod headless_cli;
+mod params;
+mod physics;
+mod save_restore;
+mod schedule;
+mod soak;
+mod sources_and_sensors;
