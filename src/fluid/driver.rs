@@ -59,15 +59,17 @@ impl FluidDataReadOnlyItem<'_, '_> {
     }
 }
 
-/// Copies every particle's components into `particles`, in query order.
-fn gather<'w, 's>(
-    particles: &mut Particles,
-    items: impl Iterator<Item = FluidDataReadOnlyItem<'w, 's>>,
-) {
-    particles.clear();
-    for (i, item) in items.enumerate() {
-        particles.push(item.position.0, Vec2::ZERO, Vec2::ZERO, 0.0);
-        item.put(particles, i);
+impl SphSolver {
+    /// Copies every particle's components into the solver's particles, in query order, as a
+    /// new gathering (a [`FluidIndex`] given before it is stale).
+    fn gather<'w, 's>(&mut self, items: impl Iterator<Item = FluidDataReadOnlyItem<'w, 's>>) {
+        self.generation = self.generation.wrapping_add(1).max(1);
+        let particles = &mut self.particles;
+        particles.clear();
+        for (i, item) in items.enumerate() {
+            particles.push(item.position.0, Vec2::ZERO, Vec2::ZERO, 0.0);
+            item.put(particles, i);
+        }
     }
 }
 
@@ -114,11 +116,6 @@ impl SphSolver {
         slot_region(particles.len(), |passes| {
             step.substep(particles, StepLength::InTick, &passes);
         });
-    }
-
-    /// Whether the tick wants another sub-step.
-    fn wants_substep(&self) -> bool {
-        self.clock().wants_substep(self.constants().max_substeps)
     }
 }
 
@@ -170,19 +167,15 @@ pub(crate) fn run_substeps(
         return;
     }
     let started = Instant::now();
-    let mut solver = world.resource_mut::<SphSolver>();
-    let shared = &mut solver.step.shared;
-    shared.clock.begin_tick(tick);
-    shared.iterations.density = 0;
-    shared.iterations.divergence = 0;
+    world.resource_mut::<SphSolver>().step.begin_tick(tick);
     if hooks_present(world) {
-        while world.resource::<SphSolver>().wants_substep() {
+        while world.resource::<SphSolver>().step.wants_substep() {
             world.run_schedule(SphSubstep);
         }
     } else {
         world.resource_scope(|world, mut solver: Mut<SphSolver>| {
-            gather(&mut solver.particles, fluid.iter(world));
-            while solver.wants_substep() {
+            solver.gather(fluid.iter(world));
+            while solver.step.wants_substep() {
                 solver.run_substep();
             }
             for (i, mut item) in fluid.iter_mut(world).enumerate() {
@@ -218,9 +211,8 @@ fn neighbors_stage(
     mut fluid: Query<IndexedData, With<FluidParticle>>,
 ) {
     let solver = &mut *solver;
-    solver.generation = solver.generation.wrapping_add(1).max(1);
+    solver.gather(fluid.iter().map(|(_, data)| data));
     let generation = solver.generation;
-    gather(&mut solver.particles, fluid.iter().map(|(_, data)| data));
     for (index, mut slot) in fluid.iter_mut().map(|(slot, _)| slot).enumerate() {
         *slot = FluidIndex {
             index: index as u32,
@@ -235,15 +227,25 @@ fn density_stage(mut solver: ResMut<SphSolver>) {
     solver.run_stage(Stage::Density);
 }
 
-/// [`SphSubstepSystems::Forces`]: the accelerations, densities and pressures into the
-/// components (the acceleration overwritten: the hooks after it add to it).
+/// [`SphSubstepSystems::Forces`]: the accelerations and densities into the components (the
+/// acceleration overwritten: the hooks after it add to it), with the pressures (WCSPH) or the
+/// divergence-free velocities (DFSPH).
 fn forces_stage(mut solver: ResMut<SphSolver>, mut fluid: Query<IndexedData, With<FluidParticle>>) {
     solver.run_stage(Stage::Forces);
-    let gravity = solver.constants().gravity;
+    let (gravity, write) = (solver.constants().gravity, solver.step.forces_write());
+    let p = &solver.particles;
     for (slot, mut data) in &mut fluid {
-        match solver.index_of(&slot) {
-            Some(i) => data.set(&solver.particles, i),
-            None => data.acceleration.0 = gravity,
+        let Some(i) = solver.index_of(&slot) else {
+            data.acceleration.0 = gravity;
+            continue;
+        };
+        data.acceleration.0 = p.acceleration[i];
+        data.density.0 = p.density[i];
+        if write.pressure {
+            data.pressure.0 = p.pressure[i];
+        }
+        if write.velocity {
+            data.velocity.0 = p.velocity[i];
         }
     }
 }
@@ -256,11 +258,29 @@ fn integrate_stage(
     mut fluid: Query<IndexedData, With<FluidParticle>>,
 ) {
     let solver = &mut *solver;
+    // A particle despawned since the neighbours stage pushes nothing; one spawned since counts
+    // in the step length.
+    let mut seen = vec![false; solver.particles.len()];
+    let mut outsider = 0.0f32;
     for (slot, data) in &fluid {
-        if let Some(i) = solver.index_of(slot) {
-            data.put(&mut solver.particles, i);
+        match solver.index_of(slot) {
+            Some(i) => {
+                data.put(&mut solver.particles, i);
+                seen[i] = true;
+            }
+            None => outsider = outsider.max(data.acceleration.length()),
         }
     }
+    for (a, _) in solver
+        .particles
+        .acceleration
+        .iter_mut()
+        .zip(&seen)
+        .filter(|(_, s)| !**s)
+    {
+        *a = Vec2::ZERO;
+    }
+    solver.step.shared.outsider_acceleration = outsider;
     solver.run_stage(Stage::Integrate);
     let mut held_back = 0;
     for (slot, mut data) in &mut fluid {
@@ -300,10 +320,10 @@ pub fn refresh_fluid_state(world: &mut World) {
 
 /// The stages of a sub-step before the step is taken, on every particle.
 fn refresh_stages(mut solver: ResMut<SphSolver>, mut fluid: Query<FluidData, With<FluidParticle>>) {
-    gather(&mut solver.particles, fluid.iter());
-    for stage in [Stage::Neighbors, Stage::Density, Stage::Forces] {
-        solver.run_stage(stage);
-    }
+    solver.gather(fluid.iter());
+    let solver = &mut *solver;
+    let (step, particles) = (&mut solver.step, &mut solver.particles);
+    slot_region(particles.len(), |passes| step.refresh(particles, &passes));
     for (i, mut item) in fluid.iter_mut().enumerate() {
         item.set(&solver.particles, i);
     }

@@ -311,6 +311,21 @@ impl SphParams {
             100.0,
             "m",
         )?;
+        self.check_counts()?;
+        self.check_tank()?;
+        let mass = self.particle_mass();
+        if !(mass.is_finite() && mass > 0.0) {
+            return Err(SphParamsError {
+                owner: "SphParams",
+                field: "particle_spacing",
+                message: format!("gives a particle mass of {mass} kg/m"),
+            });
+        }
+        Ok(())
+    }
+
+    /// The sub-step budget and the DFSPH iteration limits.
+    fn check_counts(&self) -> Result<(), SphParamsError> {
         if self.max_substeps == 0 || self.max_substeps > 100_000 {
             return Err(SphParamsError {
                 owner: "SphParams",
@@ -335,6 +350,11 @@ impl SphParams {
                 });
             }
         }
+        Ok(())
+    }
+
+    /// The tank's size, and how many wall particles it needs at this spacing.
+    fn check_tank(&self) -> Result<(), SphParamsError> {
         if let Some(tank) = &self.tank {
             for (field, value) in [("tank.width", tank.width), ("tank.height", tank.height)] {
                 if !(value.is_finite() && value >= self.particle_spacing && value <= 1.0e4) {
@@ -361,14 +381,6 @@ impl SphParams {
                     ),
                 });
             }
-        }
-        let mass = self.particle_mass();
-        if !(mass.is_finite() && mass > 0.0) {
-            return Err(SphParamsError {
-                owner: "SphParams",
-                field: "particle_spacing",
-                message: format!("gives a particle mass of {mass} kg/m"),
-            });
         }
         Ok(())
     }

@@ -46,8 +46,10 @@ pub(crate) fn guard_particles(
             non_finite + escaped - 3
         );
     }
-    solver.removed_non_finite += non_finite;
-    solver.removed_escaped += escaped;
+    if non_finite + escaped > 0 {
+        solver.removed_non_finite += non_finite;
+        solver.removed_escaped += escaped;
+    }
 }
 
 /// Re-samples the wall particles when the tank, spacing or obstacles change.

@@ -221,85 +221,107 @@ pub(crate) fn run_emitters(
     if dt <= 0.0 || emitters.is_empty() {
         return;
     }
-    let spacing = params.particle_spacing;
     let obstacles: Vec<Obstacle> = obstacles.iter().copied().collect();
     for (entity, mut emitter, position, transform) in &mut emitters {
         if !emitter.active {
             continue;
         }
-        let Some(centre) = position
-            .map(|p| p.0)
-            .or_else(|| transform.map(|t| t.translation.truncate()))
-        else {
-            if !emitter.warned {
-                warn!("FluidEmitter on {entity} has neither a Position nor a Transform");
-                emitter.warned = true;
-            }
+        let Some(centre) = nozzle_centre(entity, &mut emitter, position, transform) else {
             continue;
         };
-        if let Err(problem) = emitter.check() {
-            if !emitter.warned {
-                warn!("FluidEmitter on {entity} does not pour: {problem}");
-                emitter.warned = true;
-            }
-            continue;
-        }
-        let direction = emitter.direction.normalize();
-        let count = emitter.row_len(spacing);
-        let rows_per_second = emitter.particles_per_second(spacing) / count as f32;
-        // At most two rows in hand: a blocked nozzle does not pile up a burst.
-        emitter.owed = (emitter.owed + rows_per_second * dt).min(2.0 + rows_per_second * dt);
         // Nearby particles, the ones spawned now included, keep new ones apart.
-        let reach = emitter.width + emitter.speed * dt + 2.0 * spacing;
-        let mut taken = near(particles.iter().map(|p| p.0), centre, reach);
-        let mut spawned_any = false;
-        let mut blocked_all = true;
-        while emitter.owed >= 1.0 {
-            if emitter
-                .budget
-                .is_some_and(|budget| emitter.emitted >= budget)
-            {
-                // Spent: it stays off until the game tops the budget up and turns it on.
-                emitter.active = false;
-                emitter.owed = 0.0;
+        let reach = emitter.width + emitter.speed * dt + 2.0 * params.particle_spacing;
+        let taken = near(particles.iter().map(|p| p.0), centre, reach);
+        let spot = |p: Vec2, taken: &[Vec2]| free_spot(p, &params, &obstacles, taken);
+        let spawned = pour(
+            &mut emitter,
+            centre,
+            dt,
+            params.particle_spacing,
+            taken,
+            spot,
+        );
+        let stuck = spawned.is_empty() && emitter.owed >= 1.0;
+        let speed = emitter.direction.normalize() * emitter.speed;
+        commands.spawn_batch(
+            spawned
+                .into_iter()
+                .map(move |p| (FluidParticle, Position(p), Velocity(speed)))
+                .collect::<Vec<_>>(),
+        );
+        if stuck && !emitter.warned && !spot(centre, &[]) {
+            warn!(
+                "FluidEmitter on {entity} at {centre} is inside a wall or outside the tank: \
+                 it pours nothing"
+            );
+            emitter.warned = true;
+        }
+    }
+}
+
+/// Where the emitter's nozzle is (its `Position`, else its `Transform`), if it can pour; warns
+/// once why not.
+fn nozzle_centre(
+    entity: Entity,
+    emitter: &mut FluidEmitter,
+    position: Option<&Position>,
+    transform: Option<&Transform>,
+) -> Option<Vec2> {
+    let centre = position
+        .map(|p| p.0)
+        .or_else(|| transform.map(|t| t.translation.truncate()));
+    let problem = match (centre, emitter.check()) {
+        (Some(centre), Ok(())) => return Some(centre),
+        (None, _) => format!("FluidEmitter on {entity} has neither a Position nor a Transform"),
+        (Some(_), Err(problem)) => format!("FluidEmitter on {entity} does not pour: {problem}"),
+    };
+    if !emitter.warned {
+        warn!("{problem}");
+        emitter.warned = true;
+    }
+    None
+}
+
+/// The rows the emitter owes this tick of `dt` seconds, spread down the jet as if poured
+/// continuously, on the spots `free` leaves (given what is `taken`); counts them against the
+/// budget and returns their positions.
+fn pour(
+    emitter: &mut FluidEmitter,
+    centre: Vec2,
+    dt: f32,
+    spacing: f32,
+    mut taken: Vec<Vec2>,
+    free: impl Fn(Vec2, &[Vec2]) -> bool,
+) -> Vec<Vec2> {
+    let direction = emitter.direction.normalize();
+    let count = emitter.row_len(spacing);
+    let rows_per_second = emitter.particles_per_second(spacing) / count as f32;
+    // At most two rows in hand: a blocked nozzle does not pile up a burst.
+    emitter.owed = (emitter.owed + rows_per_second * dt).min(2.0 + rows_per_second * dt);
+    let spent = |emitter: &FluidEmitter| emitter.budget.is_some_and(|b| emitter.emitted >= b);
+    let mut spawned = Vec::new();
+    while emitter.owed >= 1.0 {
+        if spent(emitter) {
+            // Spent: it stays off until the game tops the budget up and turns it on.
+            emitter.active = false;
+            emitter.owed = 0.0;
+            break;
+        }
+        emitter.owed -= 1.0;
+        let age = emitter.owed / rows_per_second.max(1e-9);
+        let along = (emitter.speed * age).min(emitter.speed * dt);
+        for p in nozzle_row(centre, direction, count, spacing, along) {
+            if spent(emitter) {
                 break;
             }
-            emitter.owed -= 1.0;
-            // Rows are spread over the tick as if poured continuously.
-            let age = emitter.owed / rows_per_second.max(1e-9);
-            let along = (emitter.speed * age).min(emitter.speed * dt);
-            for p in nozzle_row(centre, direction, count, spacing, along) {
-                if emitter
-                    .budget
-                    .is_some_and(|budget| emitter.emitted >= budget)
-                {
-                    break;
-                }
-                if !free_spot(p, &params, &obstacles, &taken) {
-                    continue;
-                }
-                blocked_all = false;
+            if free(p, &taken) {
                 taken.push(p);
-                commands.spawn((
-                    FluidParticle,
-                    Position(p),
-                    Velocity(direction * emitter.speed),
-                ));
+                spawned.push(p);
                 emitter.emitted += 1;
-                spawned_any = true;
-            }
-        }
-        if !spawned_any && blocked_all && emitter.owed >= 1.0 && !emitter.warned {
-            let inside_wall = !free_spot(centre, &params, &obstacles, &[]);
-            if inside_wall {
-                warn!(
-                    "FluidEmitter on {entity} at {centre} is inside a wall or outside the tank: \
-                     it pours nothing"
-                );
-                emitter.warned = true;
             }
         }
     }
+    spawned
 }
 
 /// Removes the particles inside every active [`FluidDrain`] and counts them.

@@ -374,77 +374,9 @@ fn fluid_section(ui: &mut egui::Ui, data: &mut PanelData, fluid: bool) {
         .default_open(fluid)
         .show(ui, |ui| {
             let mut p = data.params.clone();
-            ui.horizontal(|ui| {
-                ui.label("preset");
-                let keep = |preset: SphParams, current: &SphParams| SphParams {
-                    particle_spacing: current.particle_spacing,
-                    support_ratio: current.support_ratio,
-                    kernel: current.kernel,
-                    gravity: current.gravity,
-                    tank: current.tank,
-                    max_substeps: current.max_substeps,
-                    solver: current.solver,
-                    dfsph: current.dfsph,
-                    speed_of_sound: if preset.background_pressure > 0.0 {
-                        preset.speed_of_sound
-                    } else {
-                        current.speed_of_sound
-                    },
-                    ..preset
-                };
-                if ui.button("Water").clicked() {
-                    p = keep(SphParams::water(), &p);
-                    *data.liquid = LiquidStyle::water();
-                }
-                if ui.button("Honey").clicked() {
-                    p = keep(SphParams::honey(), &p);
-                    *data.liquid = LiquidStyle::honey();
-                }
-                if ui.button("Gas").clicked() {
-                    p = keep(SphParams::gas(), &p);
-                }
-            });
-            for row in [
-                &SphParams::REST_DENSITY,
-                &SphParams::SPEED_OF_SOUND,
-                &SphParams::EOS_EXPONENT,
-                &SphParams::BACKGROUND_PRESSURE,
-                &SphParams::KINEMATIC_VISCOSITY,
-                &SphParams::ARTIFICIAL_VISCOSITY,
-                &SphParams::SUPPORT_RATIO,
-            ] {
-                field_slider(ui, &mut p, row);
-            }
-            enum_combo(
-                ui,
-                "kernel",
-                &mut p.kernel,
-                &KernelKind::ALL,
-                KernelKind::label,
-            );
-            field_slider(ui, &mut p, &SphParams::GRAVITY_X);
-            field_slider(ui, &mut p, &SphParams::GRAVITY_Y);
-            if let Some(tank) = &mut p.tank {
-                param_slider(ui, &mut tank.width, 0.1..=10.0, "tank width", "m", true);
-                param_slider(ui, &mut tank.height, 0.1..=10.0, "tank height", "m", true);
-            }
-            enum_combo(
-                ui,
-                "pressure solver",
-                &mut p.solver,
-                &PressureSolver::ALL,
-                PressureSolver::label,
-            );
-            match p.solver {
-                PressureSolver::Wcsph => field_slider(ui, &mut p, &SphParams::CFL_NUMBER),
-                PressureSolver::Dfsph => dfsph_settings(ui, &mut p),
-            }
-            ui.add(
-                egui::Slider::new(&mut p.max_substeps, 1..=2000)
-                    .logarithmic(true)
-                    .text("max sub-steps / tick"),
-            );
-            field_slider(ui, &mut p, &SphParams::WALL_RESTITUTION);
+            fluid_presets(ui, &mut p, &mut data.liquid);
+            fluid_material(ui, &mut p);
+            fluid_solver(ui, &mut p);
             ui.small(format!(
                 "particle spacing Δx = {:.1} mm (set by the scenario's particle count)",
                 1000.0 * p.particle_spacing
@@ -459,6 +391,90 @@ fn fluid_section(ui: &mut egui::Ui, data: &mut PanelData, fluid: bool) {
                 );
             }
         });
+}
+
+/// Water, honey and gas: the preset's material, keeping the scene (spacing, kernel, gravity,
+/// tank, solver) as it is.
+fn fluid_presets(ui: &mut egui::Ui, p: &mut SphParams, liquid: &mut LiquidStyle) {
+    ui.horizontal(|ui| {
+        ui.label("preset");
+        let keep = |preset: SphParams, current: &SphParams| SphParams {
+            particle_spacing: current.particle_spacing,
+            support_ratio: current.support_ratio,
+            kernel: current.kernel,
+            gravity: current.gravity,
+            tank: current.tank,
+            max_substeps: current.max_substeps,
+            solver: current.solver,
+            dfsph: current.dfsph,
+            speed_of_sound: if preset.background_pressure > 0.0 {
+                preset.speed_of_sound
+            } else {
+                current.speed_of_sound
+            },
+            ..preset
+        };
+        if ui.button("Water").clicked() {
+            *p = keep(SphParams::water(), p);
+            *liquid = LiquidStyle::water();
+        }
+        if ui.button("Honey").clicked() {
+            *p = keep(SphParams::honey(), p);
+            *liquid = LiquidStyle::honey();
+        }
+        if ui.button("Gas").clicked() {
+            *p = keep(SphParams::gas(), p);
+        }
+    });
+}
+
+/// The material and the scene: density, equation of state, viscosity, kernel, gravity, tank.
+fn fluid_material(ui: &mut egui::Ui, p: &mut SphParams) {
+    for row in [
+        &SphParams::REST_DENSITY,
+        &SphParams::SPEED_OF_SOUND,
+        &SphParams::EOS_EXPONENT,
+        &SphParams::BACKGROUND_PRESSURE,
+        &SphParams::KINEMATIC_VISCOSITY,
+        &SphParams::ARTIFICIAL_VISCOSITY,
+        &SphParams::SUPPORT_RATIO,
+    ] {
+        field_slider(ui, p, row);
+    }
+    enum_combo(
+        ui,
+        "kernel",
+        &mut p.kernel,
+        &KernelKind::ALL,
+        KernelKind::label,
+    );
+    field_slider(ui, p, &SphParams::GRAVITY_X);
+    field_slider(ui, p, &SphParams::GRAVITY_Y);
+    if let Some(tank) = &mut p.tank {
+        param_slider(ui, &mut tank.width, 0.1..=10.0, "tank width", "m", true);
+        param_slider(ui, &mut tank.height, 0.1..=10.0, "tank height", "m", true);
+    }
+}
+
+/// The pressure solver and its settings, the sub-step budget and the walls' restitution.
+fn fluid_solver(ui: &mut egui::Ui, p: &mut SphParams) {
+    enum_combo(
+        ui,
+        "pressure solver",
+        &mut p.solver,
+        &PressureSolver::ALL,
+        PressureSolver::label,
+    );
+    match p.solver {
+        PressureSolver::Wcsph => field_slider(ui, p, &SphParams::CFL_NUMBER),
+        PressureSolver::Dfsph => dfsph_settings(ui, p),
+    }
+    ui.add(
+        egui::Slider::new(&mut p.max_substeps, 1..=2000)
+            .logarithmic(true)
+            .text("max sub-steps / tick"),
+    );
+    field_slider(ui, p, &SphParams::WALL_RESTITUTION);
 }
 
 /// The slider of one row of `P`'s [`ParamTable::FIELDS`]: the label, unit, range and scale the

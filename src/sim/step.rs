@@ -93,8 +93,9 @@ pub enum Stage {
     /// factors, then the divergence-free solve.
     Density,
     /// Accelerations into [`Particles::acceleration`] (WCSPH: pressure, viscosity, gravity;
-    /// DFSPH: viscosity and gravity), with the densities, pressures and (DFSPH) the
-    /// divergence-free velocities. A driver adds its external forces after it.
+    /// DFSPH: viscosity and gravity), with the densities and (WCSPH) the pressures or (DFSPH)
+    /// the divergence-free velocities ([`FluidStep::forces_write`]). A driver adds its external
+    /// forces after it.
     Forces,
     /// The step length, then (DFSPH) the density solve under every acceleration, and the move.
     Integrate,
@@ -150,16 +151,27 @@ pub struct Shared {
     pub iterations: SolverIterations,
     /// Particle updates held back because they would not have been finite.
     pub non_finite: u64,
+    /// The largest acceleration (m/s²) of particles a driver moves outside the snapshot this
+    /// sub-step (spawned between its stages): the step length counts it too.
+    pub outsider_acceleration: f32,
 }
 
 /// A pressure solver's part of the stages of [`Stage`] (the shared parts, the snapshot and the
 /// step length, are [`FluidStep`]'s).
 pub trait PressureStages {
-    /// [`Stage::Density`].
+    /// [`Stage::Density`], up to what a state read without advancing needs: densities,
+    /// pressures, neighbour caches ([`FluidStep::refresh`] stops here).
     fn density(&mut self, s: &mut Shared, particles: &Particles, parallel: &impl Parallel);
 
+    /// The rest of [`Stage::Density`]: a correction of the velocities before the forces (the
+    /// divergence-free solve); none by default.
+    fn correct_velocities(&mut self, _s: &mut Shared, _parallel: &impl Parallel) {}
+
+    /// What [`Stage::Forces`] writes besides accelerations and densities.
+    const FORCES_WRITE: ForcesWrite;
+
     /// [`Stage::Forces`]: fills `s.accelerations` by slot, and writes each particle's
-    /// acceleration, density and pressure (and, if the solver changed them, velocity).
+    /// acceleration and density, and what [`FORCES_WRITE`](Self::FORCES_WRITE) says.
     fn forces(&mut self, s: &mut Shared, particles: &mut Particles, parallel: &impl Parallel);
 
     /// The longest stable step (s) under the largest acceleration, m/s².
@@ -174,6 +186,16 @@ pub trait PressureStages {
         dt: f32,
         parallel: &impl Parallel,
     ) -> u64;
+}
+
+/// What a solver's [`Stage::Forces`] writes into the [`Particles`] besides accelerations and
+/// densities (a driver copies just these into its own storage before its force hooks).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ForcesWrite {
+    /// Pressures (WCSPH: from the equation of state).
+    pub pressure: bool,
+    /// Velocities (DFSPH: made divergence-free).
+    pub velocity: bool,
 }
 
 /// Each pressure solver's own state; the one list of solvers.
@@ -217,6 +239,22 @@ macro_rules! with_solver {
     };
 }
 
+/// Runs `$body` with `$solver` bound to the type of the solver in use.
+macro_rules! with_solver_type {
+    ($state:expr, |$solver:ident| $body:expr) => {
+        match $state {
+            SolverState::Wcsph(_) => {
+                type $solver = Wcsph;
+                $body
+            }
+            SolverState::Dfsph(_) => {
+                type $solver = Dfsph;
+                $body
+            }
+        }
+    };
+}
+
 /// The state of the sub-steps that both drivers share (see the module docs).
 #[derive(Debug, Clone)]
 pub struct FluidStep {
@@ -238,6 +276,7 @@ impl FluidStep {
                 clock: SubstepClock::default(),
                 iterations: SolverIterations::default(),
                 non_finite: 0,
+                outsider_acceleration: 0.0,
             },
             solver: SolverState::new(constants.solver),
         }
@@ -260,6 +299,37 @@ impl FluidStep {
     pub fn rebuild_walls(&mut self, shapes: &[Shape]) {
         let s = &mut self.shared;
         s.walls.rebuild(&s.constants, shapes);
+    }
+
+    /// Starts a tick of `tick` seconds: the clock's, and the per-tick iteration counts.
+    pub fn begin_tick(&mut self, tick: f64) {
+        let s = &mut self.shared;
+        s.clock.begin_tick(tick);
+        s.iterations.density = 0;
+        s.iterations.divergence = 0;
+    }
+
+    /// Whether the tick wants another sub-step.
+    pub fn wants_substep(&self) -> bool {
+        let s = &self.shared;
+        s.clock.wants_substep(s.constants.max_substeps)
+    }
+
+    /// What [`Stage::Forces`] writes besides accelerations and densities.
+    pub fn forces_write(&self) -> ForcesWrite {
+        with_solver_type!(&self.solver, |S| S::FORCES_WRITE)
+    }
+
+    /// The stages before the step is taken, without the velocity correction and without
+    /// advancing time: densities, pressures and accelerations for the current positions and
+    /// velocities (for reading a consistent state right after spawning).
+    pub fn refresh(&mut self, particles: &mut Particles, parallel: &impl Parallel) {
+        let length = StepLength::Free;
+        self.stage(Stage::Neighbors, particles, length, parallel);
+        let s = &mut self.shared;
+        with_solver!(&mut self.solver, |solver| solver
+            .density(s, particles, parallel));
+        self.stage(Stage::Forces, particles, length, parallel);
     }
 
     /// The divergence-free solver's state, when it is the solver in use.
@@ -305,12 +375,15 @@ impl FluidStep {
                 s.snapshot
                     .rebuild(&c, &particles.position, &particles.velocity, parallel);
             }
-            Stage::Density => with_solver!(&mut self.solver, |solver| solver
-                .density(s, particles, parallel)),
+            Stage::Density => with_solver!(&mut self.solver, |solver| {
+                solver.density(s, particles, parallel);
+                solver.correct_velocities(s, parallel);
+            }),
             Stage::Forces => with_solver!(&mut self.solver, |solver| solver
                 .forces(s, particles, parallel)),
             Stage::Integrate => {
-                let max_acceleration = max_length(&particles.acceleration);
+                let max_acceleration = max_length(&particles.acceleration)
+                    .max(core::mem::take(&mut s.outsider_acceleration));
                 let stable = with_solver!(&mut self.solver, |solver| solver
                     .step_limit(s, max_acceleration));
                 s.clock.max_acceleration = max_acceleration;

@@ -20,7 +20,7 @@ use super::integrate::advance_particle;
 use super::kernels::RadialKernel;
 use super::layout::{FluidSnapshot, LANES, NeighborList, WallState, Walls};
 use super::parallel::{Parallel, for_each_slot};
-use super::step::{Particles, PressureStages, Shared, for_each_pair};
+use super::step::{ForcesWrite, Particles, PressureStages, Shared, for_each_pair};
 use bevy::math::{Vec2, Vec4};
 
 /// The weakly compressible solver's own state: each particle's fluid neighbours by sorted slot,
@@ -31,6 +31,11 @@ pub struct Wcsph {
 }
 
 impl PressureStages for Wcsph {
+    const FORCES_WRITE: ForcesWrite = ForcesWrite {
+        pressure: true,
+        velocity: false,
+    };
+
     /// Summed density and the equation of state by sorted slot, stored in the snapshot for the
     /// force stage (with each particle's fluid neighbours), then the wall particles' pressure
     /// extrapolated from the fluid.

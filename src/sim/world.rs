@@ -70,9 +70,8 @@ impl SliceFluid {
     /// Advances by one tick of `tick` seconds in as many stable sub-steps as it needs (at most
     /// `max_substeps`); returns the number of sub-steps.
     pub fn advance(&mut self, tick: f64) -> u32 {
-        let max_substeps = self.constants().max_substeps;
-        self.step.shared.clock.begin_tick(tick);
-        while self.step.shared.clock.wants_substep(max_substeps) {
+        self.step.begin_tick(tick);
+        while self.step.wants_substep() {
             self.substep(StepLength::InTick);
         }
         self.step.shared.clock.end_tick();

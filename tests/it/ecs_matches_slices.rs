@@ -3,10 +3,20 @@
 use crate::common::*;
 use bevy::prelude::*;
 use bevy_sph2d::fluid::SliceFluid;
-use bevy_sph2d::fluid::{KernelKind, Obstacle, PressureSolver, SphParams, Tank};
+use bevy_sph2d::fluid::{
+    Acceleration, KernelKind, Obstacle, PressureSolver, SphParams, SphSubstep, SphSubstepSystems,
+    Tank,
+};
 use bevy_sph2d::gameplay::FluidBlock;
 
 fn check(kernel: KernelKind, base: SphParams) {
+    check_driver(kernel, base, false);
+}
+
+/// With `hook`, a game's system sits in `SphSubstep` (it reads the accelerations and changes
+/// nothing), so the ECS runs every sub-step through the schedule, copying the components in
+/// and out at the stages, instead of once a tick.
+fn check_driver(kernel: KernelKind, base: SphParams, hook: bool) {
     let params = SphParams {
         particle_spacing: 0.01,
         kernel,
@@ -20,6 +30,12 @@ fn check(kernel: KernelKind, base: SphParams) {
     let obstacle = Obstacle::circle(Vec2::new(0.35, 0.05), 0.04);
 
     let mut app = create_app(params.clone());
+    if hook {
+        app.add_systems(
+            SphSubstep,
+            (|_: Query<&Acceleration>| {}).in_set(SphSubstepSystems::ExternalForces),
+        );
+    }
     app.world_mut().spawn(obstacle);
     let ids = spawn(&mut app, block);
     run(&mut app, 20);
@@ -82,6 +98,16 @@ fn ecs_matches_slices_dfsph_wendland() {
 #[test]
 fn ecs_matches_slices_dfsph_cubic() {
     check(KernelKind::CubicSpline, dfsph());
+}
+
+#[test]
+fn ecs_with_a_hook_matches_slices_wcsph() {
+    check_driver(KernelKind::WendlandC2, SphParams::water_wcsph(), true);
+}
+
+#[test]
+fn ecs_with_a_hook_matches_slices_dfsph() {
+    check_driver(KernelKind::WendlandC2, dfsph(), true);
 }
 
 fn dfsph() -> SphParams {

@@ -4,12 +4,17 @@
 use super::{Dfsph, divergence_step};
 use crate::sim::integrate::move_particle;
 use crate::sim::parallel::{Parallel, for_each_slot};
-use crate::sim::step::{Particles, PressureStages, Shared, for_each_pair};
+use crate::sim::step::{ForcesWrite, Particles, PressureStages, Shared, for_each_pair};
 use bevy::math::Vec2;
 
 impl PressureStages for Dfsph {
-    /// Steps 1 and 2: caches neighbours and gradients, sums densities and factors (warm-started
-    /// from each particle's stiffness), then makes the velocity field divergence-free.
+    const FORCES_WRITE: ForcesWrite = ForcesWrite {
+        pressure: false,
+        velocity: true,
+    };
+
+    /// Step 1: caches neighbours and gradients, sums densities and factors (warm-started from
+    /// each particle's stiffness).
     fn density(&mut self, s: &mut Shared, particles: &Particles, parallel: &impl Parallel) {
         let c = s.constants;
         let (order, stiffness) = (s.snapshot.grid().order(), &particles.stiffness);
@@ -20,6 +25,11 @@ impl PressureStages for Dfsph {
             |slot| stiffness[order[slot] as usize],
             parallel,
         );
+    }
+
+    /// Step 2: makes the velocity field divergence-free.
+    fn correct_velocities(&mut self, s: &mut Shared, parallel: &impl Parallel) {
+        let c = s.constants;
         let dt = divergence_step(&s.clock, &c, s.snapshot.max_speed);
         let iterations = self.solve_divergence(&c, dt, parallel);
         s.iterations.divergence += iterations;
