@@ -72,7 +72,7 @@ impl PressureStages for Dfsph {
 
     /// Steps 4 and 5: the density solve under every particle's acceleration (external forces
     /// included), then each particle moves with its solved velocity and keeps its pressure and
-    /// stiffness.
+    /// stiffness (its density is the force stage's).
     fn integrate(
         &mut self,
         s: &mut Shared,
@@ -99,17 +99,11 @@ impl PressureStages for Dfsph {
                 u64::from(!move_particle(&c, obstacles, x, v, solved, dt))
             },
         );
-        for_each_pair(
-            &mut particles.density,
-            &mut particles.pressure,
-            parallel,
-            |i, rho, p| {
-                let slot = slot_of[i] as usize;
-                *rho = dfsph.density(&c, slot);
-                *p = dfsph.pressure(&c, slot);
-                0
-            },
-        );
+        // The densities were written in the force stage and the solve leaves them as they are.
+        for_each_slot(&mut particles.pressure, parallel, |i, p| {
+            *p = dfsph.pressure(&c, slot_of[i] as usize);
+            0.0
+        });
         for_each_slot(&mut particles.stiffness, parallel, |i, k| {
             *k = dfsph.stiffness(slot_of[i] as usize);
             0.0
