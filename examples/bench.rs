@@ -12,8 +12,9 @@
 //! (`realtime_x` is simulated seconds per wall second; iterations count both DFSPH solves and are
 //! 0 for WCSPH).
 //!
-//! The fluid's last two lines read
-//! `path=slices|ecs particles=N steps=K threads=T neighbours=X ms_per_step=Y particle_steps_per_s=Z iterations_per_step=I`,
+//! The fluid's last two lines (three with `--hook`, the ECS again with a game system between the
+//! stages of every sub-step) read
+//! `path=slices|ecs|ecs_hook particles=N steps=K threads=T neighbours=X ms_per_step=Y particle_steps_per_s=Z iterations_per_step=I`,
 //! where a step is one solver sub-step and `neighbours` the mean number of particles within the
 //! kernel support (the particle itself and wall particles included).
 //!
@@ -73,6 +74,11 @@ struct Cli {
     /// Barnes-Hut opening angle.
     #[arg(long, default_value_t = 1.0)]
     theta: f32,
+    /// Also run the ECS with a (do-nothing) game system in `SphSubstep`, as a game that adds
+    /// forces between sub-steps does: every sub-step then reads and writes the components
+    /// (one more line, `path=ecs_hook`).
+    #[arg(long, conflicts_with_all = ["gravity", "realtime"])]
+    hook: bool,
     /// Gravity's far field: point masses, or with quadrupole moments.
     #[arg(long, value_enum, default_value_t = Expansion::Monopole)]
     multipole: Expansion,
@@ -203,35 +209,10 @@ fn main() {
     });
     drop(pool);
 
-    // The ECS: each update is one tick of SUBSTEPS_PER_TICK stable sub-steps.
-    let mut app = App::new();
-    app.add_plugins((
-        MinimalPlugins.set(bevy_sph2d::task_pool_plugin(threads)),
-        SphPlugin::default().with_params(params.clone()),
-    ))
-    // Ticks far longer than SUBSTEPS_PER_TICK stable steps, so each runs exactly that many; kept
-    // under `Time<Virtual>`'s 0.25 s cap on one frame's delta.
-    .insert_resource(Time::<Fixed>::from_duration(Duration::from_millis(200)))
-    .insert_resource(TimeUpdateStrategy::FixedTimesteps(1));
-    block.spawn(app.world_mut());
-    app.update();
-    let ticks = steps.div_ceil(SUBSTEPS_PER_TICK as usize);
-    for _ in 0..WARM_UP.div_ceil(SUBSTEPS_PER_TICK as usize) {
-        app.update();
-    }
-    let solver_state = app.world().resource::<SphSolver>();
-    let before = solver_state.clock().total_substeps;
-    let iterations_before = solver_state.iterations().total;
-    let started = Instant::now();
-    for _ in 0..ticks {
-        app.update();
-    }
-    let ecs_seconds = started.elapsed().as_secs_f64();
-    let solver_state = app.world().resource::<SphSolver>();
-    let ecs_steps = (solver_state.clock().total_substeps - before) as usize;
-    let ecs_iterations = solver_state.iterations().total - iterations_before;
-    let stats = app.world().resource::<SphStats>();
-    assert_eq!(stats.particles, particles, "the ECS lost particles");
+    let (ecs_steps, ecs_seconds, ecs_iterations) = ecs_run(&params, &block, steps, threads, false);
+    let hooked = cli
+        .hook
+        .then(|| ecs_run(&params, &block, steps, threads, true));
 
     let line = |path: &str, steps: usize, seconds: f64, iterations: u64| {
         println!(
@@ -249,6 +230,58 @@ fn main() {
     );
     line("slices", steps, slices_seconds, slices_iterations);
     line("ecs", ecs_steps, ecs_seconds, ecs_iterations);
+    if let Some((steps, seconds, iterations)) = hooked {
+        line("ecs_hook", steps, seconds, iterations);
+    }
+}
+
+/// The dam break of `block` through the ECS for about `steps` sub-steps after the warm-up, each
+/// update one tick of [`SUBSTEPS_PER_TICK`] stable sub-steps; with `hook`, a game system in
+/// [`SphSubstep`] (so every sub-step reads and writes the components). Returns the sub-steps,
+/// the seconds and the solver iterations.
+fn ecs_run(
+    params: &SphParams,
+    block: &FluidBlock,
+    steps: usize,
+    threads: usize,
+    hook: bool,
+) -> (usize, f64, u64) {
+    let particles = block.positions(params.particle_spacing).len();
+    let mut app = App::new();
+    app.add_plugins((
+        MinimalPlugins.set(bevy_sph2d::task_pool_plugin(threads)),
+        SphPlugin::default().with_params(params.clone()),
+    ))
+    // Ticks far longer than SUBSTEPS_PER_TICK stable steps, so each runs exactly that many; kept
+    // under `Time<Virtual>`'s 0.25 s cap on one frame's delta.
+    .insert_resource(Time::<Fixed>::from_duration(Duration::from_millis(200)))
+    .insert_resource(TimeUpdateStrategy::FixedTimesteps(1));
+    if hook {
+        app.add_systems(
+            SphSubstep,
+            (|| {}).in_set(SphSubstepSystems::ExternalForces),
+        );
+    }
+    block.spawn(app.world_mut());
+    app.update();
+    let ticks = steps.div_ceil(SUBSTEPS_PER_TICK as usize);
+    for _ in 0..WARM_UP.div_ceil(SUBSTEPS_PER_TICK as usize) {
+        app.update();
+    }
+    let solver_state = app.world().resource::<SphSolver>();
+    let before = solver_state.clock().total_substeps;
+    let iterations_before = solver_state.iterations().total;
+    let started = Instant::now();
+    for _ in 0..ticks {
+        app.update();
+    }
+    let seconds = started.elapsed().as_secs_f64();
+    let solver_state = app.world().resource::<SphSolver>();
+    let ecs_steps = (solver_state.clock().total_substeps - before) as usize;
+    let iterations = solver_state.iterations().total - iterations_before;
+    let stats = app.world().resource::<SphStats>();
+    assert_eq!(stats.particles, particles, "the ECS lost particles");
+    (ecs_steps, seconds, iterations)
 }
 
 /// The demo's dam break through the ECS for one simulated second: how fast it runs against the

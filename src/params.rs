@@ -106,6 +106,8 @@ pub struct ParamField<P: 'static> {
     pub slider: (f32, f32),
     /// A logarithmic slider.
     pub logarithmic: bool,
+    /// A count: whole numbers only (read and written through `f32`, exact up to 2²⁴).
+    pub integer: bool,
     /// What `valid` and `slider` are in units of, for a field whose range depends on others
     /// (the background pressure in units of the Tait stiffness); `None`: absolute.
     pub scale: Option<fn(&P) -> f32>,
@@ -216,7 +218,8 @@ fn spaced(unit: &str) -> String {
 
 /// A [`ParamField`] row for the field at `$path` (`rest_density`, `dfsph.cfl_number`): its
 /// name, getter and setter come from the path; `scale: f` after the rest makes the ranges
-/// relative to `f(params)`.
+/// relative to `f(params)`. `count: path, label, valid, slider, logarithmic` is the row of a
+/// `u32` count.
 macro_rules! param_field {
     ($($path:ident).+, $label:expr, $unit:expr, $valid:expr, $positive:expr, $slider:expr,
      $log:expr $(, scale: $scale:expr)?) => {
@@ -228,9 +231,25 @@ macro_rules! param_field {
             positive: $positive,
             slider: $slider,
             logarithmic: $log,
+            integer: false,
             scale: $crate::params::param_field!(@scale $($scale)?),
             get: |p| p.$($path).+,
             set: |p, v| p.$($path).+ = v,
+        }
+    };
+    (count: $($path:ident).+, $label:expr, $valid:expr, $slider:expr, $log:expr) => {
+        $crate::params::ParamField {
+            field: stringify!($($path).+),
+            label: $label,
+            unit: "",
+            valid: $valid,
+            positive: false,
+            slider: $slider,
+            logarithmic: $log,
+            integer: true,
+            scale: None,
+            get: |p| p.$($path).+ as f32,
+            set: |p, v| p.$($path).+ = v.round().max(0.0) as u32,
         }
     };
     (@scale) => { None };

@@ -19,6 +19,7 @@ use crate::sim::step::{Particles, Stage, StepLength};
 use bevy::ecs::query::QueryData;
 use bevy::platform::time::Instant;
 use bevy::prelude::*;
+use core::sync::atomic::{AtomicU64, Ordering};
 
 /// What the driver copies between a particle's components and the solver's [`Particles`].
 #[derive(QueryData)]
@@ -34,6 +35,27 @@ pub(crate) struct FluidData {
 
 /// The fluid's state components, with the particle's gathered index.
 type IndexedData = (&'static mut FluidIndex, FluidData);
+
+/// The fluid's state components, with the particle's gathered index to read.
+type WriteData = (&'static FluidIndex, FluidData);
+
+/// Fewest particles whose copies into the components run in parallel on Bevy's pool (these
+/// passes are light: below this, handing them out costs more than it gains).
+const PARALLEL_COPIES: usize = 8192;
+
+/// Runs `work` on every particle's components: in parallel batches on Bevy's compute pool from
+/// [`PARALLEL_COPIES`] particles (`n`) on, on the calling thread below.
+fn for_each_particle(
+    fluid: &mut Query<WriteData, With<FluidParticle>>,
+    n: usize,
+    work: impl Fn((&FluidIndex, FluidDataItem<'_, '_>)) + Send + Sync + Clone,
+) {
+    if n < PARALLEL_COPIES {
+        fluid.iter_mut().for_each(work);
+    } else {
+        fluid.par_iter_mut().for_each(work);
+    }
+}
 
 impl FluidDataItem<'_, '_> {
     /// Takes particle `i`'s values from `particles`.
@@ -62,13 +84,14 @@ impl FluidDataReadOnlyItem<'_, '_> {
 impl SphSolver {
     /// Copies every particle's components into the solver's particles, in query order, as a
     /// new gathering (a [`FluidIndex`] given before it is stale).
-    fn gather<'w, 's>(&mut self, items: impl Iterator<Item = FluidDataReadOnlyItem<'w, 's>>) {
+    fn gather<'w, 's>(
+        &mut self,
+        items: impl ExactSizeIterator<Item = FluidDataReadOnlyItem<'w, 's>>,
+    ) {
         self.generation = self.generation.wrapping_add(1).max(1);
-        let particles = &mut self.particles;
-        particles.clear();
+        self.particles.resize(items.len());
         for (i, item) in items.enumerate() {
-            particles.push(item.position.0, Vec2::ZERO, Vec2::ZERO, 0.0);
-            item.put(particles, i);
+            item.put(&mut self.particles, i);
         }
     }
 }
@@ -204,20 +227,36 @@ pub(crate) fn add_stage_systems(substep: &mut Schedule) {
     }
 }
 
-/// [`SphSubstepSystems::Neighbors`]: gathers the components (each particle learns its index)
-/// and rebuilds the sorted snapshot.
+/// [`SphSubstepSystems::Neighbors`]: gathers the components and rebuilds the sorted snapshot.
+/// Where a particle is no longer at its index (spawned, despawned or moved since the last
+/// gathering), the gathering is new and every particle learns its index.
 fn neighbors_stage(
     mut solver: ResMut<SphSolver>,
     mut fluid: Query<IndexedData, With<FluidParticle>>,
 ) {
     let solver = &mut *solver;
-    solver.gather(fluid.iter().map(|(_, data)| data));
+    let n = fluid.iter().len();
     let generation = solver.generation;
-    for (index, mut slot) in fluid.iter_mut().map(|(slot, _)| slot).enumerate() {
-        *slot = FluidIndex {
-            index: index as u32,
-            generation,
-        };
+    let mut same = n == solver.particles.len();
+    solver.particles.resize(n);
+    // What the stages read before they write it: the accelerations, densities and pressures
+    // are theirs, and the stages below write every one of them back.
+    let p = &mut solver.particles;
+    for (i, (slot, data)) in fluid.iter().enumerate() {
+        p.position[i] = data.position.0;
+        p.velocity[i] = data.velocity.0;
+        p.stiffness[i] = data.stiffness.0;
+        same &= slot.index as usize == i && slot.generation == generation;
+    }
+    if !same {
+        solver.generation = generation.wrapping_add(1).max(1);
+        let generation = solver.generation;
+        for (index, mut slot) in fluid.iter_mut().map(|(slot, _)| slot).enumerate() {
+            *slot = FluidIndex {
+                index: index as u32,
+                generation,
+            };
+        }
     }
     solver.run_stage(Stage::Neighbors);
 }
@@ -230,14 +269,15 @@ fn density_stage(mut solver: ResMut<SphSolver>) {
 /// [`SphSubstepSystems::Forces`]: the accelerations and densities into the components (the
 /// acceleration overwritten: the hooks after it add to it), with the pressures (WCSPH) or the
 /// divergence-free velocities (DFSPH).
-fn forces_stage(mut solver: ResMut<SphSolver>, mut fluid: Query<IndexedData, With<FluidParticle>>) {
+fn forces_stage(mut solver: ResMut<SphSolver>, mut fluid: Query<WriteData, With<FluidParticle>>) {
     solver.run_stage(Stage::Forces);
     let (gravity, write) = (solver.constants().gravity, solver.step.forces_write());
+    let solver = &*solver;
     let p = &solver.particles;
-    for (slot, mut data) in &mut fluid {
-        let Some(i) = solver.index_of(&slot) else {
+    for_each_particle(&mut fluid, p.len(), |(slot, mut data)| {
+        let Some(i) = solver.index_of(slot) else {
             data.acceleration.0 = gravity;
-            continue;
+            return;
         };
         data.acceleration.0 = p.acceleration[i];
         data.density.0 = p.density[i];
@@ -247,15 +287,16 @@ fn forces_stage(mut solver: ResMut<SphSolver>, mut fluid: Query<IndexedData, Wit
         if write.velocity {
             data.velocity.0 = p.velocity[i];
         }
-    }
+    });
 }
 
-/// [`SphSubstepSystems::Integrate`]: takes the components as the hooks left them, steps, and
-/// writes the results back. A particle spawned since the neighbours stage advances with its own
-/// acceleration.
+/// [`SphSubstepSystems::Integrate`]: takes the positions, velocities and accelerations as the
+/// hooks left them (the densities, pressures and stiffnesses are the solver's own, written by
+/// the stages), steps, and writes the results back. A particle spawned since the neighbours
+/// stage advances with its own acceleration.
 fn integrate_stage(
     mut solver: ResMut<SphSolver>,
-    mut fluid: Query<IndexedData, With<FluidParticle>>,
+    mut fluid: Query<WriteData, With<FluidParticle>>,
 ) {
     let solver = &mut *solver;
     // A particle despawned since the neighbours stage pushes nothing; one spawned since counts
@@ -265,7 +306,10 @@ fn integrate_stage(
     for (slot, data) in &fluid {
         match solver.index_of(slot) {
             Some(i) => {
-                data.put(&mut solver.particles, i);
+                let p = &mut solver.particles;
+                p.position[i] = data.position.0;
+                p.velocity[i] = data.velocity.0;
+                p.acceleration[i] = data.acceleration.0;
                 seen[i] = true;
             }
             None => outsider = outsider.max(data.acceleration.length()),
@@ -282,17 +326,24 @@ fn integrate_stage(
     }
     solver.step.shared.outsider_acceleration = outsider;
     solver.run_stage(Stage::Integrate);
-    let mut held_back = 0;
-    for (slot, mut data) in &mut fluid {
-        if let Some(i) = solver.index_of(&slot) {
-            data.set(&solver.particles, i);
+    let held_back = AtomicU64::new(0);
+    let stepped = &*solver;
+    let p = &stepped.particles;
+    for_each_particle(&mut fluid, p.len(), |(slot, mut data)| {
+        if let Some(i) = stepped.index_of(slot) {
+            data.position.0 = p.position[i];
+            data.velocity.0 = p.velocity[i];
+            data.pressure.0 = p.pressure[i];
+            data.stiffness.0 = p.stiffness[i];
         } else {
             let a = data.acceleration.0;
             let (x, v) = (&mut data.position.0, &mut data.velocity.0);
-            held_back += u64::from(!solver.step.advance_outsider(x, v, a));
+            if !stepped.step.advance_outsider(x, v, a) {
+                held_back.fetch_add(1, Ordering::Relaxed);
+            }
         }
-    }
-    solver.step.shared.non_finite += held_back;
+    });
+    solver.step.shared.non_finite += held_back.into_inner();
 }
 
 impl SphSolver {

@@ -78,6 +78,29 @@ impl Default for SphParams {
 /// Why a [`SphParams`] value was refused (the crate's one [`ParamsError`](crate::params::ParamsError)).
 pub type SphParamsError = crate::params::ParamsError;
 
+/// The panel's row for one side of the tank (see [`SphParams::TANK_WIDTH`]).
+macro_rules! tank_field {
+    ($side:ident, $label:expr) => {
+        ParamField {
+            field: concat!("tank.", stringify!($side)),
+            label: $label,
+            unit: "m",
+            valid: (0.0, 1.0e4),
+            positive: true,
+            slider: (0.1, 10.0),
+            logarithmic: true,
+            integer: false,
+            scale: None,
+            get: |p| p.tank.map_or(0.0, |tank| tank.$side),
+            set: |p, v| {
+                if let Some(tank) = &mut p.tank {
+                    tank.$side = v;
+                }
+            },
+        }
+    };
+}
+
 /// The rows of [`SphParams`]'s table, by name: the panel draws each by reference.
 #[rustfmt::skip]
 impl SphParams {
@@ -104,6 +127,8 @@ impl SphParams {
     pub const GRAVITY_Y: ParamField<Self> = param_field!(gravity.y, "gravity y", "m/s²", (-1.0e4, 1.0e4), false, (-30.0, 30.0), false);
     /// [`cfl_number`](Self::cfl_number).
     pub const CFL_NUMBER: ParamField<Self> = param_field!(cfl_number, "CFL number", "", (0.01, 1.0), false, (0.01, 1.0), false);
+    /// [`max_substeps`](Self::max_substeps).
+    pub const MAX_SUBSTEPS: ParamField<Self> = param_field!(count: max_substeps, "max sub-steps / tick", (1.0, 1.0e5), (1.0, 2000.0), true);
     /// [`wall_restitution`](Self::wall_restitution).
     pub const WALL_RESTITUTION: ParamField<Self> = param_field!(wall_restitution, "wall restitution", "", (0.0, 1.0), false, (0.0, 1.0), false);
     /// [`DfsphSettings::cfl_number`].
@@ -114,6 +139,16 @@ impl SphParams {
     pub const DFSPH_DENSITY_TOLERANCE: ParamField<Self> = param_field!(dfsph.density_tolerance, "density tolerance", "", (1.0e-6, 0.1), false, (1.0e-6, 0.01), true);
     /// [`DfsphSettings::divergence_tolerance`].
     pub const DFSPH_DIVERGENCE_TOLERANCE: ParamField<Self> = param_field!(dfsph.divergence_tolerance, "divergence tolerance", "", (1.0e-6, 1.0), false, (1.0e-5, 0.1), true);
+    /// [`DfsphSettings::max_density_iterations`].
+    pub const DFSPH_MAX_DENSITY_ITERATIONS: ParamField<Self> = param_field!(count: dfsph.max_density_iterations, "max density iterations", (1.0, 1.0e4), (1.0, 500.0), true);
+    /// [`DfsphSettings::max_divergence_iterations`].
+    pub const DFSPH_MAX_DIVERGENCE_ITERATIONS: ParamField<Self> = param_field!(count: dfsph.max_divergence_iterations, "max divergence iterations", (0.0, 1.0e4), (0.0, 500.0), false);
+    /// The tank's width, for the panel (no tank: reads 0, writes nothing): not in the table,
+    /// because [`validate`](Self::validate) checks the tank whole (at least one particle spacing
+    /// on a side, at most 1e4 m, and the wall particles it needs).
+    pub const TANK_WIDTH: ParamField<Self> = tank_field!(width, "tank width");
+    /// The tank's height, for the panel, as [`TANK_WIDTH`](Self::TANK_WIDTH).
+    pub const TANK_HEIGHT: ParamField<Self> = tank_field!(height, "tank height");
 }
 
 impl ParamTable for SphParams {
@@ -130,11 +165,14 @@ impl ParamTable for SphParams {
         Self::ARTIFICIAL_VISCOSITY,
         Self::SUPPORT_RATIO,
         Self::CFL_NUMBER,
+        Self::MAX_SUBSTEPS,
         Self::WALL_RESTITUTION,
         Self::DFSPH_CFL_NUMBER,
         Self::DFSPH_MAX_TIME_STEP,
         Self::DFSPH_DENSITY_TOLERANCE,
         Self::DFSPH_DIVERGENCE_TOLERANCE,
+        Self::DFSPH_MAX_DENSITY_ITERATIONS,
+        Self::DFSPH_MAX_DIVERGENCE_ITERATIONS,
     ];
 }
 
@@ -311,7 +349,6 @@ impl SphParams {
             100.0,
             "m",
         )?;
-        self.check_counts()?;
         self.check_tank()?;
         let mass = self.particle_mass();
         if !(mass.is_finite() && mass > 0.0) {
@@ -320,35 +357,6 @@ impl SphParams {
                 field: "particle_spacing",
                 message: format!("gives a particle mass of {mass} kg/m"),
             });
-        }
-        Ok(())
-    }
-
-    /// The sub-step budget and the DFSPH iteration limits.
-    fn check_counts(&self) -> Result<(), SphParamsError> {
-        if self.max_substeps == 0 || self.max_substeps > 100_000 {
-            return Err(SphParamsError {
-                owner: "SphParams",
-                field: "max_substeps",
-                message: format!("{} is outside 1..=100000", self.max_substeps),
-            });
-        }
-        let d = &self.dfsph;
-        for (field, value, min) in [
-            ("dfsph.max_density_iterations", d.max_density_iterations, 1),
-            (
-                "dfsph.max_divergence_iterations",
-                d.max_divergence_iterations,
-                0,
-            ),
-        ] {
-            if !(min..=10_000).contains(&value) {
-                return Err(SphParamsError {
-                    owner: "SphParams",
-                    field,
-                    message: format!("{value} is outside {min}..=10000"),
-                });
-            }
         }
         Ok(())
     }
@@ -446,8 +454,10 @@ mod tests {
                     row.field
                 );
             }
+            // A count cannot hold NaN: one past its range instead.
             let mut bad = water.clone();
-            (row.set)(&mut bad, f32::NAN);
+            let nonsense = if row.integer { row.valid.1 + 1.0 } else { f32::NAN };
+            (row.set)(&mut bad, nonsense);
             let error = bad.validate().unwrap_err();
             assert_eq!(error.field, row.field);
         }

@@ -20,8 +20,6 @@ pub use sensors::{
     FluidEntered, FluidLeft, FluidSample, FluidSensor, SensorReading, probe, wall_pressure,
 };
 pub use sources::{EmitterRate, FluidDrain, FluidEmitter};
-#[cfg(feature = "render")]
-pub(crate) use sources::{free_spot, near, nozzle_row};
 pub use spawn::FluidBlock;
 
 use crate::fluid::{SphParams, SphSystems, update_stats};

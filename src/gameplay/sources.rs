@@ -176,12 +176,7 @@ impl FluidDrain {
 /// Where a new particle may go (the emitters' and the pour tool's one rule): a finite point
 /// inside the tank (if any) by half a spacing, half a spacing out of every obstacle, and not
 /// within `0.8 Δx` of `taken` (the particles nearby, see [`near`]).
-pub(crate) fn free_spot(
-    p: Vec2,
-    params: &SphParams,
-    obstacles: &[Obstacle],
-    taken: &[Vec2],
-) -> bool {
+fn free_spot(p: Vec2, params: &SphParams, obstacles: &[Obstacle], taken: &[Vec2]) -> bool {
     let spacing = params.particle_spacing;
     let margin = 0.5 * spacing;
     if !p.is_finite() || params.tank.is_some_and(|tank| !tank.contains(p, -margin)) {
@@ -199,7 +194,7 @@ pub(crate) fn free_spot(
 
 /// The points of `particles` within `reach` (m) of `centre`: what a new particle near `centre`
 /// has to keep clear of.
-pub(crate) fn near(particles: impl Iterator<Item = Vec2>, centre: Vec2, reach: f32) -> Vec<Vec2> {
+fn near(particles: impl Iterator<Item = Vec2>, centre: Vec2, reach: f32) -> Vec<Vec2> {
     particles.filter(|p| p.distance(centre) <= reach).collect()
 }
 

@@ -57,21 +57,14 @@ impl ParamTable for GravityParams {
         param_field!(gravitational_constant, "G", "m³/(kg·s²)", (0.0, 1.0e12), false, (1.0e-12, 1.0e3), true),
         param_field!(theta, "opening angle θ", "", (0.0, 2.0), false, (0.0, 1.5), false),
         param_field!(softening, "softening ε", "m", (0.0, 1.0e9), false, (0.0, 0.2), false),
+        param_field!(count: leaf_capacity, "leaf capacity", (1.0, 64.0), (1.0, 64.0), false),
     ];
 }
 
 impl GravityParams {
     /// Checks every field; the first problem is returned with the field, value and range.
     pub fn validate(&self) -> Result<(), GravityParamsError> {
-        self.check_fields()?;
-        if !(1..=64).contains(&self.leaf_capacity) {
-            return Err(GravityParamsError {
-                owner: "GravityParams",
-                field: "leaf_capacity",
-                message: format!("{} is outside 1..=64", self.leaf_capacity),
-            });
-        }
-        Ok(())
+        self.check_fields()
     }
 }
 

@@ -6,9 +6,9 @@ mod tools;
 
 use crate::body::{Position, Velocity};
 use crate::control::{ResetSimulation, SimulationControl, simulation_running};
+use crate::fluid::SubstepHooks;
 use crate::fluid::{Acceleration, FluidParticle, SphParams, SphSubstep, SphSubstepSystems};
-use crate::fluid::{Obstacle, SubstepHooks};
-use crate::gameplay::{LoadSlot, SaveSlot, free_spot, near};
+use crate::gameplay::{EmitterRate, FluidEmitter, LoadSlot, SaveSlot};
 use crate::gravity::{GravityAcceleration, Mass};
 use crate::render::{ParticleCamera, ParticleDraw, ParticleView, cursor_to_world};
 use crate::schedule::{BodyForceSystems, ParticleSchedule, ParticleSystems};
@@ -16,7 +16,7 @@ use bevy::input::mouse::AccumulatedMouseScroll;
 use bevy::prelude::*;
 use bevy::window::PrimaryWindow;
 
-pub(crate) use tools::{PointerAction, PointerForce, nozzle_row, tilted_gravity};
+pub(crate) use tools::{PointerAction, PointerForce, tilted_gravity};
 
 /// Mouse and keyboard tools for the fluid.
 ///
@@ -136,8 +136,6 @@ pub struct Pointer {
     pub ui_has_keyboard: bool,
     /// Current tilt of the tank, rad.
     pub tilt: f32,
-    /// Distance poured since the last nozzle row, m.
-    poured: f32,
 }
 
 /// The pour, erase and spawn systems, in [`ParticleSystems::Input`] of the particle schedule.
@@ -175,7 +173,7 @@ impl Plugin for ParticleInteractPlugin {
         .add_systems(
             schedule,
             (
-                (pour_particles, erase_particles, spawn_bodies)
+                (aim_pour_nozzle, erase_particles, spawn_bodies)
                     .chain()
                     .run_if(simulation_running)
                     .in_set(ParticleInteractSystems),
@@ -273,50 +271,50 @@ fn apply_pointer_force(
         });
 }
 
-/// Pours rows of particles from a nozzle at the cursor while the pour tool is held, never onto
-/// existing particles and never past [`PointerSettings::max_particles`].
-fn pour_particles(
-    mut pointer: ResMut<Pointer>,
+/// The [`FluidEmitter`] the pour tool drives (spawned on first use, kept for the session).
+#[derive(Component, Debug, Clone, Copy, Default)]
+pub struct PourNozzle;
+
+/// Aims the pour tool's [`FluidEmitter`] at the cursor and turns it on while the pour tool is
+/// held: a jet of [`PointerSettings::pour_speed`] down plus half the cursor's velocity, as wide
+/// as the tool's radius, one row per spacing of jet, never past
+/// [`PointerSettings::max_particles`]. The emitter pours in [`SphSystems::Finish`] like any
+/// other, on free spots only.
+///
+/// [`SphSystems::Finish`]: crate::fluid::SphSystems::Finish
+fn aim_pour_nozzle(
+    pointer: Res<Pointer>,
     settings: Res<PointerSettings>,
     params: Res<SphParams>,
-    time: Res<Time>,
-    particles: Query<&Position, With<FluidParticle>>,
-    obstacles: Query<&Obstacle>,
+    particles: Query<(), With<FluidParticle>>,
+    mut nozzle: Query<(&mut FluidEmitter, &mut Transform), With<PourNozzle>>,
     mut commands: Commands,
 ) {
-    let (Some(center), true) = (pointer.world, pointer.tool_active) else {
-        pointer.poured = 0.0;
+    let pouring = settings.tool == PointerTool::Pour && pointer.tool_active;
+    let Ok((mut emitter, mut transform)) = nozzle.single_mut() else {
+        if pouring {
+            let mut idle = FluidEmitter::new(1.0, Vec2::NEG_Y, 1.0, EmitterRate::Particles(0.0));
+            idle.active = false;
+            commands.spawn((PourNozzle, idle, Transform::default()));
+        }
         return;
     };
-    if settings.tool != PointerTool::Pour {
+    let (Some(center), true) = (pointer.world, pouring) else {
+        emitter.active = false;
         return;
-    }
+    };
     let spacing = params.particle_spacing;
     let jet = Vec2::new(0.0, -settings.pour_speed.max(0.01)) + 0.5 * pointer.velocity;
-    pointer.poured += jet.length() * time.delta_secs();
-    if pointer.poured < spacing {
-        return;
-    }
-    pointer.poured = 0.0;
-    let reach = settings.radius + 2.0 * spacing;
-    let obstacles: Vec<Obstacle> = obstacles.iter().copied().collect();
-    let mut taken = near(particles.iter().map(|p| p.0), center, reach);
-    let mut row = Vec::new();
-    for p in nozzle_row(center, jet, settings.radius, spacing) {
-        if free_spot(p, &params, &obstacles, &taken) {
-            taken.push(p);
-            row.push(p);
-        }
-    }
-    let room = settings
-        .max_particles
-        .saturating_sub(particles.iter().len());
-    commands.spawn_batch(
-        row.into_iter()
-            .take(room)
-            .map(move |p| (FluidParticle, Position(p), Velocity(jet)))
-            .collect::<Vec<_>>(),
-    );
+    transform.translation = center.extend(0.0);
+    emitter.width = settings.radius.max(spacing);
+    emitter.direction = jet;
+    emitter.speed = jet.length();
+    let rows_per_second = emitter.speed / spacing;
+    emitter.rate = EmitterRate::Particles(rows_per_second * emitter.row_len(spacing) as f32);
+    let room = (settings.max_particles as usize).saturating_sub(particles.iter().len());
+    let room = u32::try_from(room).unwrap_or(u32::MAX);
+    emitter.budget = Some(emitter.emitted.saturating_add(room));
+    emitter.active = room > 0;
 }
 
 /// Despawns the particles under the cursor while the erase tool is held.

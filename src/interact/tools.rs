@@ -1,5 +1,6 @@
 //! Pure mouse-tool maths: the smooth force profile, the accelerations of the pull, push and drag
-//! tools, the pouring nozzle and gravity tilting. See
+//! tools and gravity tilting (the pour tool drives a
+//! [`FluidEmitter`](crate::gameplay::FluidEmitter)). See
 //! [`ParticleInteractPlugin`](crate::interact::ParticleInteractPlugin).
 
 use bevy::math::Vec2;
@@ -76,18 +77,6 @@ impl PointerForce {
     }
 }
 
-/// Positions of one row of the pour tool's nozzle centred at `center`, `width` (m) wide across
-/// the pour `direction`, at `spacing` (m): at least one particle and at most 256, none for a
-/// spacing that is not positive. The row is the emitters' (`gameplay::nozzle_row`).
-pub fn nozzle_row(center: Vec2, direction: Vec2, width: f32, spacing: f32) -> Vec<Vec2> {
-    if !(spacing > 0.0 && center.is_finite()) {
-        return Vec::new();
-    }
-    let count = ((width.max(0.0) / spacing).floor() as u32).clamp(1, 256);
-    let direction = direction.normalize_or(Vec2::NEG_Y);
-    crate::gameplay::nozzle_row(center, direction, count, spacing, 0.0).collect()
-}
-
 /// Gravity of the same magnitude as `gravity`, tilted as if the tank were turned by `angle`
 /// (radians, positive: turned anticlockwise, so the fluid runs to the left).
 pub fn tilted_gravity(gravity: Vec2, angle: f32) -> Vec2 {
@@ -155,13 +144,7 @@ mod tests {
     }
 
     #[test]
-    fn nozzle_and_tilt() {
-        let row = nozzle_row(Vec2::new(1.0, 1.0), Vec2::NEG_Y, 0.05, 0.01);
-        assert_eq!(row.len(), 5);
-        assert!(row.iter().all(|p| (p.y - 1.0).abs() < 1e-6));
-        assert!((row[0].x - 0.98).abs() < 1e-6 && (row[4].x - 1.02).abs() < 1e-6);
-        assert_eq!(nozzle_row(Vec2::ZERO, Vec2::NEG_Y, 0.0, 0.01).len(), 1);
-        assert!(nozzle_row(Vec2::ZERO, Vec2::NEG_Y, 0.1, 0.0).is_empty());
+    fn tilt() {
         let g = Vec2::new(0.0, -9.81);
         assert!((tilted_gravity(g, 0.0) - g).length() < 1e-6);
         let left = tilted_gravity(g, 0.3);

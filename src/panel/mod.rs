@@ -15,7 +15,7 @@ use crate::render::{
 use bevy::prelude::*;
 use bevy_egui::input::EguiWantsInput;
 use bevy_egui::{EguiContexts, EguiPlugin, EguiPrimaryContextPass, egui};
-use widgets::{color_bar, enum_combo, param_slider, stat_grid};
+use widgets::{color_bar, enum_combo, param_slider, slider, stat_grid};
 
 /// The egui tweak panel, docked on the left of the window.
 ///
@@ -450,9 +450,9 @@ fn fluid_material(ui: &mut egui::Ui, p: &mut SphParams) {
     );
     field_slider(ui, p, &SphParams::GRAVITY_X);
     field_slider(ui, p, &SphParams::GRAVITY_Y);
-    if let Some(tank) = &mut p.tank {
-        param_slider(ui, &mut tank.width, 0.1..=10.0, "tank width", "m", true);
-        param_slider(ui, &mut tank.height, 0.1..=10.0, "tank height", "m", true);
+    if p.tank.is_some() {
+        field_slider(ui, p, &SphParams::TANK_WIDTH);
+        field_slider(ui, p, &SphParams::TANK_HEIGHT);
     }
 }
 
@@ -469,11 +469,7 @@ fn fluid_solver(ui: &mut egui::Ui, p: &mut SphParams) {
         PressureSolver::Wcsph => field_slider(ui, p, &SphParams::CFL_NUMBER),
         PressureSolver::Dfsph => dfsph_settings(ui, p),
     }
-    ui.add(
-        egui::Slider::new(&mut p.max_substeps, 1..=2000)
-            .logarithmic(true)
-            .text("max sub-steps / tick"),
-    );
+    field_slider(ui, p, &SphParams::MAX_SUBSTEPS);
     field_slider(ui, p, &SphParams::WALL_RESTITUTION);
 }
 
@@ -482,14 +478,11 @@ fn fluid_solver(ui: &mut egui::Ui, p: &mut SphParams) {
 fn field_slider<P: ParamTable>(ui: &mut egui::Ui, p: &mut P, row: &ParamField<P>) {
     let mut value = (row.get)(p);
     let (min, max) = row.slider_range(p);
-    param_slider(
-        ui,
-        &mut value,
-        min..=max,
-        row.label,
-        row.unit,
-        row.logarithmic,
-    );
+    let mut slider = slider(&mut value, min..=max, row.label, row.unit, row.logarithmic);
+    if row.integer {
+        slider = slider.integer();
+    }
+    ui.add(slider);
     if value != (row.get)(p) {
         (row.set)(p, value);
     }
@@ -502,20 +495,12 @@ fn dfsph_settings(ui: &mut egui::Ui, p: &mut SphParams) {
         &SphParams::DFSPH_MAX_TIME_STEP,
         &SphParams::DFSPH_DENSITY_TOLERANCE,
         &SphParams::DFSPH_DIVERGENCE_TOLERANCE,
+        &SphParams::DFSPH_MAX_DENSITY_ITERATIONS,
+        &SphParams::DFSPH_MAX_DIVERGENCE_ITERATIONS,
     ] {
         field_slider(ui, p, row);
     }
-    let d = &mut p.dfsph;
-    ui.add(
-        egui::Slider::new(&mut d.max_density_iterations, 1..=500)
-            .logarithmic(true)
-            .text("max density iterations"),
-    );
-    ui.add(
-        egui::Slider::new(&mut d.max_divergence_iterations, 0..=500)
-            .text("max divergence iterations"),
-    );
-    ui.checkbox(&mut d.warm_start, "warm start");
+    ui.checkbox(&mut p.dfsph.warm_start, "warm start");
 }
 
 fn gravity_section(ui: &mut egui::Ui, data: &mut PanelData) {
@@ -529,7 +514,6 @@ fn gravity_section(ui: &mut egui::Ui, data: &mut PanelData) {
             for row in GravityParams::FIELDS {
                 field_slider(ui, &mut g, row);
             }
-            ui.add(egui::Slider::new(&mut g.leaf_capacity, 1..=64).text("leaf capacity"));
             enum_combo(
                 ui,
                 "far field",

@@ -13,17 +13,26 @@ pub(super) fn param_slider(
     unit: &str,
     logarithmic: bool,
 ) {
+    ui.add(slider(value, range, label, unit, logarithmic));
+}
+
+/// The slider [`param_slider`] adds, for a caller to set more on (whole numbers, say).
+pub(super) fn slider<'a>(
+    value: &'a mut f32,
+    range: RangeInclusive<f32>,
+    label: &str,
+    unit: &str,
+    logarithmic: bool,
+) -> egui::Slider<'a> {
     let text = if unit.is_empty() {
         label.to_string()
     } else {
         format!("{label} ({unit})")
     };
-    ui.add(
-        egui::Slider::new(value, range)
-            .logarithmic(logarithmic)
-            .clamping(egui::SliderClamping::Always)
-            .text(text),
-    );
+    egui::Slider::new(value, range)
+        .logarithmic(logarithmic)
+        .clamping(egui::SliderClamping::Always)
+        .text(text)
 }
 
 /// A combo box over `options`.

@@ -493,7 +493,25 @@ pub(crate) fn update_liquid(
     let metres_per_pixel = windows
         .single()
         .map_or(spacing, |w| view_height / w.height().max(1.0));
-    let settings = LiquidUniform {
+    let settings = liquid_uniform(&style, mode, spacing, view_height, metres_per_pixel);
+    if let Some(material) = materials.get(&view.material)
+        && material.settings != settings
+        && let Some(mut material) = materials.get_mut(&view.material)
+    {
+        material.settings = settings;
+    }
+}
+
+/// The surface shader's settings from the style, the colouring `mode`, the particle `spacing`
+/// (m), the view's height (m) and its metres per screen pixel.
+fn liquid_uniform(
+    style: &LiquidStyle,
+    mode: RenderMode,
+    spacing: f32,
+    view_height: f32,
+    metres_per_pixel: f32,
+) -> LiquidUniform {
+    LiquidUniform {
         shallow: style.shallow_color.to_linear().to_vec4(),
         deep: style.deep_color.to_linear().to_vec4(),
         rim: style.rim_color.to_linear().to_vec4(),
@@ -510,12 +528,6 @@ pub(crate) fn update_liquid(
             0.0,
             0.0,
         ),
-    };
-    if let Some(material) = materials.get(&view.material)
-        && material.settings != settings
-        && let Some(mut material) = materials.get_mut(&view.material)
-    {
-        material.settings = settings;
     }
 }
 

@@ -73,6 +73,17 @@ impl Particles {
         self.stiffness.clear();
     }
 
+    /// Sets the number of particles to `n`, keeping the first ones; new ones at rest at the
+    /// origin, for a driver to overwrite.
+    pub fn resize(&mut self, n: usize) {
+        self.position.resize(n, Vec2::ZERO);
+        self.velocity.resize(n, Vec2::ZERO);
+        self.acceleration.resize(n, Vec2::ZERO);
+        self.density.resize(n, 0.0);
+        self.pressure.resize(n, 0.0);
+        self.stiffness.resize(n, Vec2::ZERO);
+    }
+
     /// Appends one particle.
     pub fn push(&mut self, position: Vec2, velocity: Vec2, stiffness: Vec2, rest_density: f32) {
         self.position.push(position);

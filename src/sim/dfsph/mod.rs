@@ -63,12 +63,13 @@ use super::config::SphConstants;
 use super::density::{max_length, with_kernels};
 use super::kernels::RadialKernel;
 use super::layout::{FluidSnapshot, SlotVectors, Walls};
-use super::parallel::{CHUNK, Parallel, for_each_slot, run_jobs};
+use super::parallel::{Parallel, for_each_slot};
 use crate::sim::simd::Simd;
 use bevy::math::{Vec2, Vec4};
 use rows::{BLOCK, Rows};
 use solve::Target;
 
+mod gather;
 #[expect(
     unsafe_code,
     reason = "the AVX2 sums, each unsafe block with its SAFETY note"
@@ -235,132 +236,6 @@ impl Dfsph {
             self.expansion_step = 1.0 / radius.max(1.0);
             self.expansion_key = key;
         }
-    }
-
-    /// The neighbour pass of [`prepare`](Self::prepare): fills rows of `stride` entries and
-    /// returns the most neighbours any particle has (more than `stride`: the rows were short).
-    #[expect(clippy::too_many_arguments, reason = "one pass, spelled out")]
-    fn gather_neighbors<W: RadialKernel, G: RadialKernel>(
-        &mut self,
-        w: &W,
-        g: &G,
-        c: &SphConstants,
-        fluid: &FluidSnapshot,
-        walls: &Walls,
-        stride: usize,
-        parallel: &impl Parallel,
-    ) -> usize {
-        let n = self.state.len();
-        let scaled_volume = c.gradient_scale * c.volume;
-        let deficient_below = DEFICIENT_NEIGHBORHOOD * lattice_neighbors(c) as f32;
-        let support_sq = Vec4::splat(c.support_sq);
-        let tiny = Vec4::splat(1e-12 * c.support_sq);
-        let eta_sq = 0.01 * c.smoothing_length * c.smoothing_length;
-        let mut jobs: Vec<_> = self
-            .state
-            .chunks_mut(CHUNK)
-            .zip(self.rows.chunks_mut(CHUNK))
-            .zip(self.weights.chunks_mut(CHUNK * stride))
-            .enumerate()
-            .map(|(k, ((state, rows), weights))| (k * CHUNK, state, rows, weights, 0usize))
-            .collect();
-        run_jobs(
-            parallel,
-            n,
-            &mut jobs,
-            |(start, states, rows, weights, most)| {
-                for (k, state) in states.iter_mut().enumerate() {
-                    let x = fluid.points.get(*start + k);
-                    let row_weights = &mut weights[k * stride..(k + 1) * stride];
-                    let mut len = 0usize;
-                    let mut density = Vec4::ZERO;
-                    let (mut sum_x, mut sum_y, mut sum_sq) = (Vec4::ZERO, Vec4::ZERO, Vec4::ZERO);
-                    fluid.points.for_each_batch(x, |first, dx, dy, r2| {
-                        let values = w.value_sq_x4(r2);
-                        density += values;
-                        let inside = r2.cmplt(support_sq) & r2.cmpgt(tiny);
-                        let mut mask = inside.bitmask();
-                        if mask == 0 {
-                            return;
-                        }
-                        let slope = g.derivative_over_r_x4(r2.min(support_sq).sqrt());
-                        // ∇ᵢWᵢⱼ = slope (xᵢ − xⱼ) = −slope (dx, dy); zero on lanes outside.
-                        let scale = Vec4::select(inside, -scaled_volume * slope, Vec4::ZERO);
-                        let (gx, gy) = (scale * dx, scale * dy);
-                        sum_x += gx;
-                        sum_y += gy;
-                        sum_sq += gx * gx + gy * gy;
-                        let (gx, gy) = (gx.to_array(), gy.to_array());
-                        let values = (c.volume * values).to_array();
-                        while mask != 0 {
-                            let lane = mask.trailing_zeros() as usize;
-                            mask &= mask - 1;
-                            if len < stride {
-                                let gradient = Vec2::new(gx[lane], gy[lane]);
-                                rows.set(k, len, first + lane, gradient);
-                                row_weights[len] = values[lane];
-                            }
-                            len += 1;
-                        }
-                    });
-                    let sum = Vec2::new(sum_x.element_sum(), sum_y.element_sum());
-                    let sum_sq = sum_sq.element_sum();
-                    let mut wall_gradient = Vec2::ZERO;
-                    let mut wall_viscosity = 0.0f32;
-                    let mut wall_count = 0u32;
-                    let mut wall_head = Vec2::ZERO;
-                    walls.points.for_each_batch(x, |_, dx, dy, r2| {
-                        density += w.value_sq_x4(r2);
-                        let inside = r2.cmplt(support_sq) & r2.cmpgt(tiny);
-                        let mask = inside.bitmask();
-                        if mask == 0 {
-                            return;
-                        }
-                        let r2 = r2.min(support_sq);
-                        let slope = g.derivative_over_r_x4(r2.sqrt());
-                        let gx = (-scaled_volume * slope * dx).to_array();
-                        let gy = (-scaled_volume * slope * dy).to_array();
-                        let friction =
-                            (c.volume * slope * r2 / (r2 + Vec4::splat(eta_sq))).to_array();
-                        let head = (Vec4::splat(c.gravity.x) * dx + Vec4::splat(c.gravity.y) * dy)
-                            .to_array();
-                        for lane in 0..4 {
-                            if mask & (1 << lane) != 0 {
-                                let gradient = Vec2::new(gx[lane], gy[lane]);
-                                wall_gradient += gradient;
-                                wall_viscosity += friction[lane];
-                                wall_head -= head[lane] * gradient;
-                                wall_count += 1;
-                            }
-                        }
-                    });
-                    *most = (*most).max(len);
-                    // The row is padded to whole blocks (see `Rows`) with the particle itself at
-                    // zero gradient and weight, which adds nothing to any sum over it.
-                    if len <= stride {
-                        rows.pad(k, len, *start + k);
-                        row_weights[len..len.next_multiple_of(BLOCK)].fill(0.0);
-                    }
-                    // A particle's own stiffness changes its density rate through its own velocity
-                    // (pushed by its neighbours and the mirrored wall) and its neighbours'.
-                    let diagonal = (sum + WALL_MIRROR * wall_gradient).length_squared() + sum_sq;
-                    *state = SlotState {
-                        count: len.min(stride) as u32,
-                        density: c.volume * density.element_sum(),
-                        factor: if diagonal > 1e-6 / c.support_sq {
-                            1.0 / diagonal
-                        } else {
-                            0.0
-                        },
-                        deficient: ((len as u32 + wall_count) as f32) < deficient_below,
-                        wall_gradient,
-                        wall_viscosity,
-                        wall_head,
-                    };
-                }
-            },
-        );
-        jobs.iter().map(|job| job.4).max().unwrap_or(0)
     }
 
     /// Replaces the density solve's warm start by its SPH average over each particle's

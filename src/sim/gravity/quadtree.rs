@@ -139,40 +139,9 @@ impl QuadTree {
     /// calls it on the crate's compute pool).
     pub fn build(&mut self, positions: &[Vec2], masses: &[f32], leaf_capacity: usize) {
         let leaf_capacity = leaf_capacity.max(1);
-        let valid = |i: usize| {
-            positions[i].is_finite() && masses.get(i).is_some_and(|m| m.is_finite() && *m > 0.0)
-        };
         let n = positions.len().min(masses.len());
         self.input_len = n;
-        let (min, max, count) = (0..n)
-            .into_par_iter()
-            .with_min_len(PARALLEL_BODIES)
-            .fold(
-                || {
-                    (
-                        Vec2::splat(f32::INFINITY),
-                        Vec2::splat(f32::NEG_INFINITY),
-                        0usize,
-                    )
-                },
-                |(lo, hi, count), i| {
-                    if valid(i) {
-                        (lo.min(positions[i]), hi.max(positions[i]), count + 1)
-                    } else {
-                        (lo, hi, count)
-                    }
-                },
-            )
-            .reduce(
-                || {
-                    (
-                        Vec2::splat(f32::INFINITY),
-                        Vec2::splat(f32::NEG_INFINITY),
-                        0,
-                    )
-                },
-                |a, b| (a.0.min(b.0), a.1.max(b.1), a.2 + b.2),
-            );
+        let (min, max, count) = bounds(positions, masses, n);
         self.nodes.clear();
         self.keys.clear();
         if count == 0 {
@@ -187,14 +156,44 @@ impl QuadTree {
         let width = (max - min).max_element().max(f32::MIN_POSITIVE) * (1.0 + 1e-5) + 1e-30;
         let index_bits = (usize::BITS - (n.max(2) - 1).leading_zeros()).max(1);
         let bits = ((63 - index_bits) / 2).min(BITS);
-        let cells = (1u64 << bits) as f32;
-        let scale = cells / width;
+        self.sort_bodies(positions, masses, count, (min, width), (bits, index_bits));
+        let builder = Builder {
+            keys: &self.keys,
+            code_shift: index_bits,
+            bits,
+            x: &self.x,
+            y: &self.y,
+            mass: &self.mass,
+            leaf_capacity,
+        };
+        let mut nodes = std::mem::take(&mut self.nodes);
+        builder.subtree(0, count, 0, min, width, &mut nodes);
+        self.nodes = nodes;
+        self.quadrupoles.clear();
+        if self.multipole == Multipole::Quadrupole {
+            self.compute_quadrupoles();
+        }
+    }
+
+    /// Sorts the `count` valid bodies by Morton key in the square at `min` of side `width`
+    /// (`bits` per coordinate, the body's index in the low `index_bits`), and copies their
+    /// positions and masses into that order.
+    fn sort_bodies(
+        &mut self,
+        positions: &[Vec2],
+        masses: &[f32],
+        count: usize,
+        (min, width): (Vec2, f32),
+        (bits, index_bits): (u32, u32),
+    ) {
+        let n = positions.len().min(masses.len());
+        let scale = (1u64 << bits) as f32 / width;
         let quantise = |v: f32| ((v * scale) as u64).min((1u64 << bits) - 1);
         // Real keys are below 2⁶³; left-out bodies get `u64::MAX`, so they sort to the end and
         // are cut off. Keys carry the index, so they are unique and the sorted order does not
         // depend on the thread count.
         let key = |i: u32| {
-            if valid(i as usize) {
+            if valid(positions, masses, i as usize) {
                 let p = positions[i as usize] - min;
                 (morton(quantise(p.x), quantise(p.y)) << index_bits) | i as u64
             } else {
@@ -222,22 +221,6 @@ impl QuadTree {
         self.mass.clear();
         self.mass
             .par_extend(order.par_iter().map(|&i| masses[i as usize]));
-        let builder = Builder {
-            keys: &self.keys,
-            code_shift: index_bits,
-            bits,
-            x: &self.x,
-            y: &self.y,
-            mass: &self.mass,
-            leaf_capacity,
-        };
-        let mut nodes = std::mem::take(&mut self.nodes);
-        builder.subtree(0, count, 0, min, width, &mut nodes);
-        self.nodes = nodes;
-        self.quadrupoles.clear();
-        if self.multipole == Multipole::Quadrupole {
-            self.compute_quadrupoles();
-        }
     }
 
     /// The quadrupole moment per unit mass of every node about its centre of mass (kept per
@@ -719,6 +702,33 @@ fn centre(mass: f64, moment: [f64; 2]) -> Vec2 {
     } else {
         Vec2::ZERO
     }
+}
+
+/// Whether body `i` takes part: a finite position and a finite positive mass.
+fn valid(positions: &[Vec2], masses: &[f32], i: usize) -> bool {
+    positions[i].is_finite() && masses.get(i).is_some_and(|m| m.is_finite() && *m > 0.0)
+}
+
+/// The bounding box of the first `n` bodies that take part, and how many there are.
+fn bounds(positions: &[Vec2], masses: &[f32], n: usize) -> (Vec2, Vec2, usize) {
+    let empty = || {
+        (
+            Vec2::splat(f32::INFINITY),
+            Vec2::splat(f32::NEG_INFINITY),
+            0usize,
+        )
+    };
+    (0..n)
+        .into_par_iter()
+        .with_min_len(PARALLEL_BODIES)
+        .fold(empty, |(lo, hi, count), i| {
+            if valid(positions, masses, i) {
+                (lo.min(positions[i]), hi.max(positions[i]), count + 1)
+            } else {
+                (lo, hi, count)
+            }
+        })
+        .reduce(empty, |a, b| (a.0.min(b.0), a.1.max(b.1), a.2 + b.2))
 }
 
 #[cfg(test)]

@@ -1,0 +1,211 @@
+//! The neighbour pass of [`Dfsph::prepare`]: for each fluid particle, its density by summation,
+//! its cached row of fluid neighbours (slot, gradient, kernel weight), its sums over the wall
+//! particles, and the DFSPH factor.
+
+use super::rows::{BLOCK, RowsMut};
+use super::{DEFICIENT_NEIGHBORHOOD, Dfsph, SlotState, WALL_MIRROR, lattice_neighbors};
+use crate::sim::config::SphConstants;
+use crate::sim::kernels::RadialKernel;
+use crate::sim::layout::{FluidSnapshot, Walls};
+use crate::sim::parallel::{CHUNK, Parallel, run_jobs};
+use bevy::math::{Vec2, Vec4};
+
+/// The constants of the pass, in the form its loops use.
+struct Terms {
+    /// `s V`: the gradient's scale times a particle's volume, m².
+    scaled_volume: f32,
+    /// A particle's volume, m².
+    volume: f32,
+    /// The squared support, m², in every lane.
+    support_sq: Vec4,
+    /// Below this squared distance (m²) a pair is the particle itself.
+    tiny: Vec4,
+    /// `η² = 0.01 h²`, m², which keeps the wall friction finite at contact.
+    eta_sq: f32,
+    /// Gravity, m/s² (the walls' hydrostatic head).
+    gravity: Vec2,
+}
+
+/// What a particle's fluid neighbours sum to.
+struct FluidSums {
+    /// Fluid neighbours inside the support (the particle excluded), even past the row's length.
+    count: usize,
+    /// Kernel values per lane, the particle included (walls are added on top).
+    density: Vec4,
+    /// `Σⱼ gᵢⱼ`, 1/m.
+    gradient: Vec2,
+    /// `Σⱼ |gᵢⱼ|²`, 1/m².
+    gradient_sq: f32,
+}
+
+/// What a particle's wall neighbours sum to (see [`SlotState`]).
+#[derive(Default)]
+struct WallSums {
+    gradient: Vec2,
+    viscosity: f32,
+    head: Vec2,
+    count: u32,
+}
+
+impl Dfsph {
+    /// Fills rows of `stride` entries and returns the most neighbours any particle has (more
+    /// than `stride`: the rows were short).
+    #[expect(clippy::too_many_arguments, reason = "one pass, spelled out")]
+    pub(super) fn gather_neighbors<W: RadialKernel, G: RadialKernel>(
+        &mut self,
+        w: &W,
+        g: &G,
+        c: &SphConstants,
+        fluid: &FluidSnapshot,
+        walls: &Walls,
+        stride: usize,
+        parallel: &impl Parallel,
+    ) -> usize {
+        let n = self.state.len();
+        let terms = Terms {
+            scaled_volume: c.gradient_scale * c.volume,
+            volume: c.volume,
+            support_sq: Vec4::splat(c.support_sq),
+            tiny: Vec4::splat(1e-12 * c.support_sq),
+            eta_sq: 0.01 * c.smoothing_length * c.smoothing_length,
+            gravity: c.gravity,
+        };
+        let deficient_below = DEFICIENT_NEIGHBORHOOD * lattice_neighbors(c) as f32;
+        let mut jobs: Vec<_> = self
+            .state
+            .chunks_mut(CHUNK)
+            .zip(self.rows.chunks_mut(CHUNK))
+            .zip(self.weights.chunks_mut(CHUNK * stride))
+            .enumerate()
+            .map(|(k, ((state, rows), weights))| (k * CHUNK, state, rows, weights, 0usize))
+            .collect();
+        run_jobs(
+            parallel,
+            n,
+            &mut jobs,
+            |(start, states, rows, weights, most)| {
+                for (k, state) in states.iter_mut().enumerate() {
+                    let slot = *start + k;
+                    let x = fluid.points.get(slot);
+                    let row_weights = &mut weights[k * stride..(k + 1) * stride];
+                    let mut sums = fluid_row(w, g, &terms, fluid, x, (rows, k), row_weights);
+                    let wall = wall_sums(w, g, &terms, walls, x, &mut sums.density);
+                    let len = sums.count;
+                    *most = (*most).max(len);
+                    // The row is padded to whole blocks (see `Rows`) with the particle itself at
+                    // zero gradient and weight, which adds nothing to any sum over it.
+                    if len <= stride {
+                        rows.pad(k, len, slot);
+                        row_weights[len..len.next_multiple_of(BLOCK)].fill(0.0);
+                    }
+                    // A particle's own stiffness changes its density rate through its own velocity
+                    // (pushed by its neighbours and the mirrored wall) and its neighbours'.
+                    let diagonal = (sums.gradient + WALL_MIRROR * wall.gradient).length_squared()
+                        + sums.gradient_sq;
+                    *state = SlotState {
+                        count: len.min(stride) as u32,
+                        density: c.volume * sums.density.element_sum(),
+                        factor: if diagonal > 1e-6 / c.support_sq {
+                            1.0 / diagonal
+                        } else {
+                            0.0
+                        },
+                        deficient: ((len as u32 + wall.count) as f32) < deficient_below,
+                        wall_gradient: wall.gradient,
+                        wall_viscosity: wall.viscosity,
+                        wall_head: wall.head,
+                    };
+                }
+            },
+        );
+        jobs.iter().map(|job| job.4).max().unwrap_or(0)
+    }
+}
+
+/// The fluid neighbours of the particle at `x`: writes the `k`-th row of `rows` and its kernel
+/// weights (up to the row's length) and returns the sums over all of them.
+#[inline(always)]
+fn fluid_row<W: RadialKernel, G: RadialKernel>(
+    w: &W,
+    g: &G,
+    t: &Terms,
+    fluid: &FluidSnapshot,
+    x: Vec2,
+    (rows, k): (&mut RowsMut<'_>, usize),
+    row_weights: &mut [f32],
+) -> FluidSums {
+    let stride = row_weights.len();
+    let mut len = 0usize;
+    let mut density = Vec4::ZERO;
+    let (mut sum_x, mut sum_y, mut sum_sq) = (Vec4::ZERO, Vec4::ZERO, Vec4::ZERO);
+    fluid.points.for_each_batch(x, |first, dx, dy, r2| {
+        let values = w.value_sq_x4(r2);
+        density += values;
+        let inside = r2.cmplt(t.support_sq) & r2.cmpgt(t.tiny);
+        let mut mask = inside.bitmask();
+        if mask == 0 {
+            return;
+        }
+        let slope = g.derivative_over_r_x4(r2.min(t.support_sq).sqrt());
+        // ∇ᵢWᵢⱼ = slope (xᵢ − xⱼ) = −slope (dx, dy); zero on lanes outside.
+        let scale = Vec4::select(inside, -t.scaled_volume * slope, Vec4::ZERO);
+        let (gx, gy) = (scale * dx, scale * dy);
+        sum_x += gx;
+        sum_y += gy;
+        sum_sq += gx * gx + gy * gy;
+        let (gx, gy) = (gx.to_array(), gy.to_array());
+        let values = (t.volume * values).to_array();
+        while mask != 0 {
+            let lane = mask.trailing_zeros() as usize;
+            mask &= mask - 1;
+            if len < stride {
+                rows.set(k, len, first + lane, Vec2::new(gx[lane], gy[lane]));
+                row_weights[len] = values[lane];
+            }
+            len += 1;
+        }
+    });
+    FluidSums {
+        count: len,
+        density,
+        gradient: Vec2::new(sum_x.element_sum(), sum_y.element_sum()),
+        gradient_sq: sum_sq.element_sum(),
+    }
+}
+
+/// The wall particles near `x`: adds their kernel values to `density` and returns their sums.
+#[inline(always)]
+fn wall_sums<W: RadialKernel, G: RadialKernel>(
+    w: &W,
+    g: &G,
+    t: &Terms,
+    walls: &Walls,
+    x: Vec2,
+    density: &mut Vec4,
+) -> WallSums {
+    let mut sums = WallSums::default();
+    walls.points.for_each_batch(x, |_, dx, dy, r2| {
+        *density += w.value_sq_x4(r2);
+        let inside = r2.cmplt(t.support_sq) & r2.cmpgt(t.tiny);
+        let mask = inside.bitmask();
+        if mask == 0 {
+            return;
+        }
+        let r2 = r2.min(t.support_sq);
+        let slope = g.derivative_over_r_x4(r2.sqrt());
+        let gx = (-t.scaled_volume * slope * dx).to_array();
+        let gy = (-t.scaled_volume * slope * dy).to_array();
+        let friction = (t.volume * slope * r2 / (r2 + Vec4::splat(t.eta_sq))).to_array();
+        let head = (Vec4::splat(t.gravity.x) * dx + Vec4::splat(t.gravity.y) * dy).to_array();
+        for lane in 0..4 {
+            if mask & (1 << lane) != 0 {
+                let gradient = Vec2::new(gx[lane], gy[lane]);
+                sums.gradient += gradient;
+                sums.viscosity += friction[lane];
+                sums.head -= head[lane] * gradient;
+                sums.count += 1;
+            }
+        }
+    });
+    sums
+}
