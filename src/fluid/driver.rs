@@ -6,8 +6,10 @@
 //! components into the solver's [`Particles`] once, runs every sub-step on them, and copies
 //! the results back once. Where a game's systems hook in between the stages (gravity on fluid
 //! particles, the mouse tools, a game's own forces), it runs the [`SphSubstep`] schedule once per
-//! sub-step: its stage systems call the same stages one by one and copy the components in before
-//! and out after, so the hooks read and write current values.
+//! sub-step: its stage systems call the same stages one by one, copying in what the stages read
+//! (positions, velocities, stiffnesses; the accelerations after the hooks) and out what they
+//! write, so the hooks read and write current values. Particles learn their index only when the
+//! gathering changes (a particle spawned, despawned or moved since the last one).
 
 use super::components::{
     Acceleration, Density, FluidIndex, FluidParticle, Position, Pressure, Stiffness, Velocity,
@@ -19,7 +21,6 @@ use crate::sim::step::{Particles, Stage, StepLength};
 use bevy::ecs::query::QueryData;
 use bevy::platform::time::Instant;
 use bevy::prelude::*;
-use core::sync::atomic::{AtomicU64, Ordering};
 
 /// What the driver copies between a particle's components and the solver's [`Particles`].
 #[derive(QueryData)]
@@ -38,24 +39,6 @@ type IndexedData = (&'static mut FluidIndex, FluidData);
 
 /// The fluid's state components, with the particle's gathered index to read.
 type WriteData = (&'static FluidIndex, FluidData);
-
-/// Fewest particles whose copies into the components run in parallel on Bevy's pool (these
-/// passes are light: below this, handing them out costs more than it gains).
-const PARALLEL_COPIES: usize = 8192;
-
-/// Runs `work` on every particle's components: in parallel batches on Bevy's compute pool from
-/// [`PARALLEL_COPIES`] particles (`n`) on, on the calling thread below.
-fn for_each_particle(
-    fluid: &mut Query<WriteData, With<FluidParticle>>,
-    n: usize,
-    work: impl Fn((&FluidIndex, FluidDataItem<'_, '_>)) + Send + Sync + Clone,
-) {
-    if n < PARALLEL_COPIES {
-        fluid.iter_mut().for_each(work);
-    } else {
-        fluid.par_iter_mut().for_each(work);
-    }
-}
 
 impl FluidDataItem<'_, '_> {
     /// Takes particle `i`'s values from `particles`.
@@ -274,10 +257,10 @@ fn forces_stage(mut solver: ResMut<SphSolver>, mut fluid: Query<WriteData, With<
     let (gravity, write) = (solver.constants().gravity, solver.step.forces_write());
     let solver = &*solver;
     let p = &solver.particles;
-    for_each_particle(&mut fluid, p.len(), |(slot, mut data)| {
+    for (slot, mut data) in &mut fluid {
         let Some(i) = solver.index_of(slot) else {
             data.acceleration.0 = gravity;
-            return;
+            continue;
         };
         data.acceleration.0 = p.acceleration[i];
         data.density.0 = p.density[i];
@@ -287,7 +270,7 @@ fn forces_stage(mut solver: ResMut<SphSolver>, mut fluid: Query<WriteData, With<
         if write.velocity {
             data.velocity.0 = p.velocity[i];
         }
-    });
+    }
 }
 
 /// [`SphSubstepSystems::Integrate`]: takes the positions, velocities and accelerations as the
@@ -326,11 +309,10 @@ fn integrate_stage(
     }
     solver.step.shared.outsider_acceleration = outsider;
     solver.run_stage(Stage::Integrate);
-    let held_back = AtomicU64::new(0);
-    let stepped = &*solver;
-    let p = &stepped.particles;
-    for_each_particle(&mut fluid, p.len(), |(slot, mut data)| {
-        if let Some(i) = stepped.index_of(slot) {
+    let mut held_back = 0;
+    for (slot, mut data) in &mut fluid {
+        let p = &solver.particles;
+        if let Some(i) = solver.index_of(slot) {
             data.position.0 = p.position[i];
             data.velocity.0 = p.velocity[i];
             data.pressure.0 = p.pressure[i];
@@ -338,12 +320,10 @@ fn integrate_stage(
         } else {
             let a = data.acceleration.0;
             let (x, v) = (&mut data.position.0, &mut data.velocity.0);
-            if !stepped.step.advance_outsider(x, v, a) {
-                held_back.fetch_add(1, Ordering::Relaxed);
-            }
+            held_back += u64::from(!solver.step.advance_outsider(x, v, a));
         }
-    });
-    solver.step.shared.non_finite += held_back.into_inner();
+    }
+    solver.step.shared.non_finite += held_back;
 }
 
 impl SphSolver {

@@ -456,7 +456,11 @@ mod tests {
             }
             // A count cannot hold NaN: one past its range instead.
             let mut bad = water.clone();
-            let nonsense = if row.integer { row.valid.1 + 1.0 } else { f32::NAN };
+            let nonsense = if row.integer {
+                row.valid.1 + 1.0
+            } else {
+                f32::NAN
+            };
             (row.set)(&mut bad, nonsense);
             let error = bad.validate().unwrap_err();
             assert_eq!(error.field, row.field);

@@ -311,7 +311,9 @@ fn aim_pour_nozzle(
     emitter.speed = jet.length();
     let rows_per_second = emitter.speed / spacing;
     emitter.rate = EmitterRate::Particles(rows_per_second * emitter.row_len(spacing) as f32);
-    let room = (settings.max_particles as usize).saturating_sub(particles.iter().len());
+    let room = settings
+        .max_particles
+        .saturating_sub(particles.iter().len());
     let room = u32::try_from(room).unwrap_or(u32::MAX);
     emitter.budget = Some(emitter.emitted.saturating_add(room));
     emitter.active = room > 0;
