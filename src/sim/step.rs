@@ -487,26 +487,58 @@ impl FluidStep {
     }
 }
 
-/// Runs `work(index, &mut a[index], &mut b[index])` for every index, in parallel chunks of
-/// [`CHUNK`], and returns the sum of what it returns (a count), the same on any number of
-/// threads.
-pub(crate) fn for_each_pair<A: Send, B: Send>(
-    a: &mut [A],
-    b: &mut [B],
+/// One particle's values in [`Particles`], for a pass that writes several of them.
+pub(crate) struct ParticleMut<'a> {
+    pub position: &'a mut Vec2,
+    pub velocity: &'a mut Vec2,
+    pub acceleration: &'a mut Vec2,
+    pub density: &'a mut f32,
+    pub pressure: &'a mut f32,
+    pub stiffness: &'a mut Vec2,
+}
+
+/// Runs `work(index, particle)` for every particle, in parallel chunks of [`CHUNK`], and returns
+/// the sum of what it returns (a count), the same on any number of threads: one pass however
+/// many of a particle's values it writes.
+pub(crate) fn for_each_particle(
+    particles: &mut Particles,
     parallel: &impl Parallel,
-    work: impl Fn(usize, &mut A, &mut B) -> u64 + Sync,
+    work: impl Fn(usize, ParticleMut<'_>) -> u64 + Sync,
 ) -> u64 {
-    let n = a.len().min(b.len());
-    let mut jobs: Vec<_> = a[..n]
+    let n = particles.len();
+    let p = particles;
+    let mut jobs: Vec<_> = p
+        .position
         .chunks_mut(CHUNK)
-        .zip(b[..n].chunks_mut(CHUNK))
+        .zip(p.velocity.chunks_mut(CHUNK))
+        .zip(p.acceleration.chunks_mut(CHUNK))
+        .zip(p.density.chunks_mut(CHUNK))
+        .zip(p.pressure.chunks_mut(CHUNK))
+        .zip(p.stiffness.chunks_mut(CHUNK))
         .enumerate()
-        .map(|(k, (a, b))| (k * CHUNK, a, b, 0u64))
+        .map(|(k, (((((x, v), a), rho), pressure), stiffness))| {
+            (k * CHUNK, (x, v, a, rho, pressure, stiffness), 0u64)
+        })
         .collect();
-    run_jobs(parallel, n, &mut jobs, |(start, a, b, count)| {
-        for (k, (a, b)) in a.iter_mut().zip(b.iter_mut()).enumerate() {
-            *count += work(*start + k, a, b);
-        }
-    });
-    jobs.iter().map(|job| job.3).sum()
+    run_jobs(
+        parallel,
+        n,
+        &mut jobs,
+        |(start, (x, v, a, rho, p, k), count)| {
+            let rows = x.iter_mut().zip(v.iter_mut()).zip(a.iter_mut());
+            let rows = rows.zip(rho.iter_mut()).zip(p.iter_mut()).zip(k.iter_mut());
+            for (j, (((((x, v), a), rho), p), k)) in rows.enumerate() {
+                let particle = ParticleMut {
+                    position: x,
+                    velocity: v,
+                    acceleration: a,
+                    density: rho,
+                    pressure: p,
+                    stiffness: k,
+                };
+                *count += work(*start + j, particle);
+            }
+        },
+    );
+    jobs.iter().map(|job| job.2).sum()
 }

@@ -20,7 +20,7 @@ use super::integrate::advance_particle;
 use super::kernels::RadialKernel;
 use super::layout::{FluidSnapshot, LANES, NeighborList, WallState, Walls};
 use super::parallel::{Parallel, for_each_slot};
-use super::step::{ForcesWrite, Particles, PressureStages, Shared, for_each_pair};
+use super::step::{ForcesWrite, Particles, PressureStages, Shared, for_each_particle};
 use bevy::math::{Vec2, Vec4};
 
 /// The weakly compressible solver's own state: each particle's fluid neighbours by sorted slot,
@@ -79,20 +79,13 @@ impl PressureStages for Wcsph {
             });
         });
         let (slot_of, accelerations) = (snapshot.grid().slot_of(), &s.accelerations);
-        for_each_slot(&mut particles.acceleration, parallel, |i, a| {
-            *a = accelerations[slot_of[i] as usize];
-            0.0
+        for_each_particle(particles, parallel, |i, particle| {
+            let slot = slot_of[i] as usize;
+            *particle.acceleration = accelerations[slot];
+            *particle.density = snapshot.pressure.get(slot).0;
+            *particle.pressure = pressure_from_density(&c, *particle.density);
+            0
         });
-        for_each_pair(
-            &mut particles.density,
-            &mut particles.pressure,
-            parallel,
-            |i, rho, p| {
-                *rho = snapshot.pressure.get(slot_of[i] as usize).0;
-                *p = pressure_from_density(&c, *rho);
-                0
-            },
-        );
     }
 
     fn step_limit(&self, s: &Shared, max_acceleration: f32) -> f32 {
@@ -108,13 +101,10 @@ impl PressureStages for Wcsph {
         parallel: &impl Parallel,
     ) -> u64 {
         let (c, obstacles) = (s.constants, &s.walls.obstacles);
-        let accelerations = &particles.acceleration;
-        for_each_pair(
-            &mut particles.position,
-            &mut particles.velocity,
-            parallel,
-            |i, x, v| u64::from(!advance_particle(&c, obstacles, x, v, accelerations[i], dt)),
-        )
+        for_each_particle(particles, parallel, |_, p| {
+            let (x, v, a) = (p.position, p.velocity, *p.acceleration);
+            u64::from(!advance_particle(&c, obstacles, x, v, a, dt))
+        })
     }
 }
 

@@ -4,7 +4,7 @@
 use super::{Dfsph, divergence_step};
 use crate::sim::integrate::move_particle;
 use crate::sim::parallel::{Parallel, for_each_slot};
-use crate::sim::step::{ForcesWrite, Particles, PressureStages, Shared, for_each_pair};
+use crate::sim::step::{ForcesWrite, Particles, PressureStages, Shared, for_each_particle};
 use bevy::math::Vec2;
 
 impl PressureStages for Dfsph {
@@ -49,20 +49,12 @@ impl PressureStages for Dfsph {
             0.0
         });
         let (slot_of, accelerations) = (snapshot.grid().slot_of(), &s.accelerations);
-        for_each_pair(
-            &mut particles.acceleration,
-            &mut particles.velocity,
-            parallel,
-            |i, a, v| {
-                let slot = slot_of[i] as usize;
-                *a = accelerations[slot];
-                *v = dfsph.velocity(slot);
-                0
-            },
-        );
-        for_each_slot(&mut particles.density, parallel, |i, rho| {
-            *rho = dfsph.density(&c, slot_of[i] as usize);
-            0.0
+        for_each_particle(particles, parallel, |i, p| {
+            let slot = slot_of[i] as usize;
+            *p.acceleration = accelerations[slot];
+            *p.velocity = dfsph.velocity(slot);
+            *p.density = dfsph.density(&c, slot);
+            0
         });
     }
 
@@ -90,24 +82,15 @@ impl PressureStages for Dfsph {
         s.iterations.total += iterations as u64;
         s.iterations.total_density += iterations as u64;
         let (dfsph, obstacles) = (&*self, &s.walls.obstacles);
-        let held_back = for_each_pair(
-            &mut particles.position,
-            &mut particles.velocity,
-            parallel,
-            |i, x, v| {
-                let solved = dfsph.velocity(slot_of[i] as usize);
-                u64::from(!move_particle(&c, obstacles, x, v, solved, dt))
-            },
-        );
         // The densities were written in the force stage and the solve leaves them as they are.
-        for_each_slot(&mut particles.pressure, parallel, |i, p| {
-            *p = dfsph.pressure(&c, slot_of[i] as usize);
-            0.0
-        });
-        for_each_slot(&mut particles.stiffness, parallel, |i, k| {
-            *k = dfsph.stiffness(slot_of[i] as usize);
-            0.0
-        });
-        held_back
+        for_each_particle(particles, parallel, |i, p| {
+            let slot = slot_of[i] as usize;
+            *p.pressure = dfsph.pressure(&c, slot);
+            *p.stiffness = dfsph.stiffness(slot);
+            let solved = dfsph.velocity(slot);
+            u64::from(!move_particle(
+                &c, obstacles, p.position, p.velocity, solved, dt,
+            ))
+        })
     }
 }
