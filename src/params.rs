@@ -129,8 +129,9 @@ impl<P> Copy for ParamField<P> {}
 pub trait ParamTable: Sized + 'static {
     /// The type's name, as errors give it (`"SphParams"`).
     const OWNER: &'static str;
-    /// The numeric fields with a plain range, in the panel's order (fields whose range depends
-    /// on others, vectors, counts and switches are checked by the type's `validate` itself).
+    /// The numeric fields and counts with a plain range, in the panel's order (fields whose
+    /// range depends on others, vectors and switches are checked by the type's `validate`
+    /// itself).
     const FIELDS: &'static [ParamField<Self>];
 
     /// Checks every row of the table; the first problem is returned.

@@ -154,8 +154,8 @@ impl SphParams {
 impl ParamTable for SphParams {
     const OWNER: &'static str = "SphParams";
 
-    /// The numeric fields with a range, in the panel's order (gravity as a vector, the tank,
-    /// the counts and the switches are checked in [`validate`](Self::validate) itself).
+    /// The numeric fields and counts with a range, in the panel's order (gravity as a vector,
+    /// the tank and the switches are checked in [`validate`](Self::validate) itself).
     const FIELDS: &'static [ParamField<Self>] = &[
         Self::REST_DENSITY,
         Self::SPEED_OF_SOUND,

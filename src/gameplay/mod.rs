@@ -22,6 +22,7 @@ pub use sensors::{
 pub use sources::{EmitterRate, FluidDrain, FluidEmitter};
 pub use spawn::FluidBlock;
 
+use crate::control::simulation_running;
 use crate::fluid::{SphParams, SphSystems, update_stats};
 use crate::params::apply_params;
 use crate::schedule::ParticleSchedule;
@@ -30,8 +31,8 @@ use bevy::prelude::*;
 /// Runs the gameplay components in the fluid's schedule: on
 /// [`ResetSimulation`](crate::control::ResetSimulation) the [`SphScenario`] respawns (in
 /// [`SphSystems::Prepare`], before the parameters are checked); after the sub-steps, in
-/// [`SphSystems::Finish`] and before the statistics, [`FluidEmitter`]s pour, [`FluidDrain`]s
-/// remove and [`FluidSensor`]s measure (sending [`FluidEntered`] and [`FluidLeft`]).
+/// [`SphSystems::Finish`] and before the statistics, while the simulation runs (not paused),
+/// [`FluidEmitter`]s pour, [`FluidDrain`]s remove and [`FluidSensor`]s measure (sending [`FluidEntered`] and [`FluidLeft`]).
 /// [`SphPlugin`](crate::fluid::SphPlugin) adds it.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct FluidGameplayPlugin;
@@ -58,6 +59,7 @@ impl Plugin for FluidGameplayPlugin {
                         sensors::run_sensors,
                     )
                         .chain()
+                        .run_if(simulation_running)
                         .in_set(SphSystems::Finish)
                         .before(update_stats),
                 ),

@@ -271,18 +271,26 @@ fn apply_pointer_force(
         });
 }
 
+/// Most particles in one row of the pour tool's nozzle.
+const MAX_POUR_ROW: u32 = 256;
+
+/// Most rows the pour tool pours in one tick (a flick of the cursor must not fire a burst).
+const MAX_POUR_ROWS_PER_TICK: f32 = 4.0;
+
 /// The [`FluidEmitter`] the pour tool drives (spawned on first use, kept for the session).
 #[derive(Component, Debug, Clone, Copy, Default)]
 pub struct PourNozzle;
 
 /// Aims the pour tool's [`FluidEmitter`] at the cursor and turns it on while the pour tool is
 /// held: a jet of [`PointerSettings::pour_speed`] down plus half the cursor's velocity, as wide
-/// as the tool's radius, one row per spacing of jet, never past
+/// as the tool's radius (at most [`MAX_POUR_ROW`] particles), one row per spacing of jet and at
+/// most [`MAX_POUR_ROWS_PER_TICK`] a tick, never past
 /// [`PointerSettings::max_particles`]. The emitter pours in [`SphSystems::Finish`] like any
 /// other, on free spots only.
 ///
 /// [`SphSystems::Finish`]: crate::fluid::SphSystems::Finish
 fn aim_pour_nozzle(
+    time: Res<Time>,
     pointer: Res<Pointer>,
     settings: Res<PointerSettings>,
     params: Res<SphParams>,
@@ -299,17 +307,23 @@ fn aim_pour_nozzle(
         }
         return;
     };
-    let (Some(center), true) = (pointer.world, pouring) else {
+    // Outside the tank the tool pours nothing (the emitter, kept off, does not warn).
+    let inside = |p: Vec2| params.tank.is_none_or(|tank| tank.contains(p, 0.0));
+    let (Some(center), true) = (pointer.world.filter(|&p| inside(p)), pouring) else {
         emitter.active = false;
         return;
     };
     let spacing = params.particle_spacing;
     let jet = Vec2::new(0.0, -settings.pour_speed.max(0.01)) + 0.5 * pointer.velocity;
     transform.translation = center.extend(0.0);
-    emitter.width = settings.radius.max(spacing);
+    emitter.width = settings
+        .radius
+        .clamp(spacing, MAX_POUR_ROW as f32 * spacing);
     emitter.direction = jet;
     emitter.speed = jet.length();
-    let rows_per_second = emitter.speed / spacing;
+    // One row per spacing of jet, and a few a tick at most however fast the cursor flicks.
+    let most = MAX_POUR_ROWS_PER_TICK / time.delta_secs().max(1e-6);
+    let rows_per_second = (emitter.speed / spacing).min(most);
     emitter.rate = EmitterRate::Particles(rows_per_second * emitter.row_len(spacing) as f32);
     let room = settings
         .max_particles

@@ -92,6 +92,30 @@ fn emitter_rate(params: SphParams) {
 }
 
 #[test]
+fn a_paused_simulation_pours_nothing() {
+    let mut app = create_app(params());
+    app.update();
+    app.world_mut()
+        .resource_mut::<bevy_sph2d::SimulationControl>()
+        .toggle_pause();
+    let emitter = app
+        .world_mut()
+        .spawn((
+            FluidEmitter::new(0.05, Vec2::NEG_Y, 1.0, EmitterRate::Volume(0.01)),
+            Transform::from_xyz(0.5, 0.5, 0.0),
+        ))
+        .id();
+    run(&mut app, 30);
+    assert_eq!(particles(&mut app), 0, "poured while paused");
+    app.world_mut()
+        .resource_mut::<bevy_sph2d::SimulationControl>()
+        .toggle_pause();
+    run(&mut app, 30);
+    let emitted = app.world().get::<FluidEmitter>(emitter).unwrap().emitted;
+    assert!(emitted > 0 && particles(&mut app) == emitted as usize);
+}
+
+#[test]
 fn emitter_never_spawns_into_occupied_space() {
     // Pouring straight into the resting layer's surface: every new particle keeps its distance.
     let mut app = resting_layer();
