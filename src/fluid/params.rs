@@ -177,7 +177,7 @@ impl ParamTable for SphParams {
 }
 
 /// Most wall particles a tank may need before validation refuses it (memory guard).
-pub const MAX_WALL_PARTICLES: u64 = 4_000_000;
+pub const MAX_WALL_PARTICLES: u64 = crate::sim::boundary::MAX_BOUNDARY_PARTICLES;
 
 impl SphParams {
     /// Water in a 2 m × 1.2 m tank at 2 cm spacing, incompressible ([`PressureSolver::Dfsph`],

@@ -2,6 +2,7 @@
 //! particles, before the tick's sub-steps.
 
 use super::components::{FluidParticle, Obstacle, Position, Velocity};
+use super::params::MAX_WALL_PARTICLES;
 use super::resources::SphSolver;
 use crate::sim::boundary::Shape;
 use bevy::prelude::*;
@@ -64,8 +65,20 @@ pub(crate) fn rebuild_walls(
         return;
     }
     let shapes: Vec<Shape> = obstacles.iter().map(|o| o.0).collect();
-    for shape in shapes.iter().filter(|o| !o.is_valid()) {
-        warn!("ignoring obstacle {shape:?}: coordinates must be finite and radii positive");
+    let (spacing, layers) = {
+        let c = solver.step.constants();
+        (c.spacing, c.wall_layers)
+    };
+    for shape in &shapes {
+        if !shape.is_valid() {
+            warn!("ignoring obstacle {shape:?}: coordinates must be finite and radii positive");
+        } else if !shape.fits(spacing, layers) {
+            warn!(
+                "ignoring obstacle {shape:?}: at {spacing} m spacing it needs {} boundary \
+                 particles (limit {MAX_WALL_PARTICLES}); make it smaller or the spacing coarser",
+                shape.sample_count(spacing, layers)
+            );
+        }
     }
     solver.step.rebuild_walls(&shapes);
     solver.walls_dirty = false;

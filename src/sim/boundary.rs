@@ -133,6 +133,10 @@ pub enum Shape {
     },
 }
 
+/// Most boundary particles one tank or one solid may need: a larger one is refused rather
+/// than sampled (4 million particles are about 200 MB of walls).
+pub const MAX_BOUNDARY_PARTICLES: u64 = 4_000_000;
+
 impl Shape {
     /// A disc of `radius` (m) around `center`.
     pub const fn circle(center: Vec2, radius: f32) -> Self {
@@ -142,6 +146,42 @@ impl Shape {
     /// A capsule of half thickness `radius` (m) around the segment `start`–`end`.
     pub const fn segment(start: Vec2, end: Vec2, radius: f32) -> Self {
         Self::Segment { start, end, radius }
+    }
+
+    /// Whether the solid is valid and its sampling at `spacing` (m), `layers` deep, needs at
+    /// most `MAX_BOUNDARY_PARTICLES` (4 million): the walls sample only solids that fit.
+    pub fn fits(&self, spacing: f32, layers: u32) -> bool {
+        self.is_valid() && self.sample_count(spacing, layers) <= MAX_BOUNDARY_PARTICLES
+    }
+
+    /// About how many boundary particles [`sample`](Self::sample) makes at `spacing` (m),
+    /// `layers` deep, counted without making them (so a huge solid costs nothing to refuse).
+    pub fn sample_count(&self, spacing: f32, layers: u32) -> u64 {
+        use core::f64::consts::{PI, TAU};
+        let (radius, length) = match *self {
+            Self::Circle { radius, .. } => (radius as f64, 0.0),
+            Self::Segment { start, end, radius } => (radius as f64, start.distance(end) as f64),
+        };
+        let spacing = spacing as f64;
+        let rows = (length / spacing).round().max(1.0);
+        let mut count = 0.0f64;
+        let mut core = true;
+        for k in 0..layers {
+            let d = radius - (k as f64 + 0.5) * spacing;
+            if d < 0.5 * spacing {
+                break;
+            }
+            core = k + 1 < layers;
+            count += if length > 0.0 {
+                2.0 * (rows + 1.0) + 2.0 * ((PI * d / spacing).round().max(1.0) - 1.0)
+            } else {
+                (TAU * d / spacing).round().max(3.0)
+            };
+        }
+        if core {
+            count += if length > 0.0 { rows + 1.0 } else { 1.0 };
+        }
+        count.min(u64::MAX as f64) as u64
     }
 
     /// Whether every coordinate is finite and radii are non-negative (a circle's positive).
@@ -331,5 +371,29 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn a_solid_is_counted_before_it_is_sampled_and_a_huge_one_does_not_fit() {
+        let shapes = [
+            Shape::circle(Vec2::ZERO, 0.1),
+            Shape::circle(Vec2::ZERO, 0.012),
+            Shape::segment(Vec2::ZERO, Vec2::new(0.3, 0.1), 0.05),
+            Shape::segment(Vec2::ZERO, Vec2::new(0.2, 0.0), 0.004),
+        ];
+        for shape in shapes {
+            let mut points = Vec::new();
+            shape.sample(0.01, 3, &mut points);
+            assert_eq!(
+                shape.sample_count(0.01, 3),
+                points.len() as u64,
+                "{shape:?}"
+            );
+            assert!(shape.fits(0.01, 3));
+        }
+        // Sampling this would take about 8 GB: it is counted, not sampled.
+        let huge = Shape::circle(Vec2::ZERO, 1.0e9);
+        assert!(huge.sample_count(0.01, 3) > MAX_BOUNDARY_PARTICLES);
+        assert!(!huge.fits(0.01, 3));
     }
 }

@@ -371,10 +371,11 @@ impl Walls {
         if let Some(tank) = &c.tank {
             tank.sample(c.spacing, c.wall_layers, &mut points);
         }
-        for obstacle in obstacles.iter().filter(|o| o.is_valid()) {
+        let fits = |o: &&Shape| o.fits(c.spacing, c.wall_layers);
+        for obstacle in obstacles.iter().filter(fits) {
             obstacle.sample(c.spacing, c.wall_layers, &mut points);
         }
-        self.obstacles = obstacles.iter().copied().filter(Shape::is_valid).collect();
+        self.obstacles = obstacles.iter().filter(fits).copied().collect();
         // Wall particles outline the whole tank: budget cells for its area, not their number.
         self.points
             .rebuild(c.support, &points, NeighborGrid::STATIC_BUDGET);

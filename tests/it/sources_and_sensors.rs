@@ -273,6 +273,20 @@ fn probe_reads_hydrostatic_pressure_and_nothing_outside() {
 }
 
 #[test]
+fn a_solid_too_big_to_sample_is_refused_and_the_fluid_runs_on() {
+    let mut app = resting_layer();
+    let before = particles(&mut app);
+    let walls = app.world().resource::<SphStats>().wall_particles;
+    // Sampled, this disc would need some 10¹² boundary particles (terabytes).
+    app.world_mut()
+        .spawn(Obstacle::circle(Vec2::new(0.5, 0.3), 1.0e9));
+    run(&mut app, 10);
+    assert_eq!(particles(&mut app), before);
+    assert_eq!(app.world().resource::<SphStats>().wall_particles, walls);
+    assert_eq!(app.world().resource::<SphStats>().removed_escaped, 0);
+}
+
+#[test]
 fn bad_emitters_drains_and_sensors_change_nothing() {
     let mut app = resting_layer();
     let before = particles(&mut app);
