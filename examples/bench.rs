@@ -25,7 +25,7 @@
 
 use bevy::prelude::*;
 use bevy::time::TimeUpdateStrategy;
-use bevy_sph2d::fluid::SliceFluid;
+use bevy_sph2d::fluid::{MovingSolid, Pose, SliceFluid, SolidMotion, SphConstants};
 use bevy_sph2d::fluid::{PressureSolver, SphParams, SphSolver, Tank};
 use bevy_sph2d::gameplay::SCENARIO_TANK;
 use bevy_sph2d::gameplay::{FluidBlock, ScenarioKind, SphScenario};
@@ -79,6 +79,11 @@ struct Cli {
     /// (one more line, `path=ecs_hook`).
     #[arg(long, conflicts_with_all = ["gravity", "realtime"])]
     hook: bool,
+    /// Solids in the fluid's plain-slices run: boxes six spacings wide on the water's surface,
+    /// sinking at 1 cm/s, so their boundary particles move every sub-step (prints
+    /// `solids=N` on the slices line).
+    #[arg(long, default_value_t = 0, conflicts_with_all = ["gravity", "realtime"])]
+    solids: u32,
     /// Gravity's far field: point masses, or with quadrupole moments.
     #[arg(long, value_enum, default_value_t = Expansion::Monopole)]
     multipole: Expansion,
@@ -172,6 +177,8 @@ fn main() {
     let block = FluidBlock::dam_break(column.x + 1e-4, column.y + 1e-4);
     let positions = block.positions(params.particle_spacing);
     assert_eq!(positions.len(), particles);
+    let constants = params.constants().expect("validated above");
+    let solids = boxes(&constants, column, cli.solids as usize);
     eprintln!(
         "dam break: {particles} particles, column {:.2} m x {:.2} m, tank {:.2} m x {:.2} m, \
          support ratio {}, {} kernel, {} solver, {threads} threads",
@@ -189,9 +196,9 @@ fn main() {
         .num_threads(threads)
         .build()
         .expect("rayon pool");
-    let constants = params.constants().expect("validated above");
     let (slices_seconds, neighbours, slices_iterations) = pool.install(|| {
         let mut fluid = SliceFluid::new(constants, positions.clone(), &[]);
+        fluid.solids_mut().extend(solids);
         for _ in 0..WARM_UP {
             fluid.step();
         }
@@ -228,11 +235,42 @@ fn main() {
         "ecs / slices time per step: {:.3}",
         (ecs_seconds / ecs_steps as f64) / (slices_seconds / steps as f64)
     );
-    line("slices", steps, slices_seconds, slices_iterations);
+    if cli.solids > 0 {
+        line(
+            &format!("slices solids={}", cli.solids),
+            steps,
+            slices_seconds,
+            slices_iterations,
+        );
+    } else {
+        line("slices", steps, slices_seconds, slices_iterations);
+    }
     line("ecs", ecs_steps, ecs_seconds, ecs_iterations);
     if let Some((steps, seconds, iterations)) = hooked {
         line("ecs_hook", steps, seconds, iterations);
     }
+}
+
+/// `count` boxes six spacings wide sitting on the surface of the water column, spread along it
+/// and sinking slowly.
+fn boxes(c: &SphConstants, column: Vec2, count: usize) -> Vec<MovingSolid> {
+    let size = 6.0 * c.spacing;
+    (0..count)
+        .filter_map(|k| {
+            let shape = SolidShape::rectangle(size, size);
+            let mut solid = MovingSolid::new(shape, Vec2::ZERO, c.spacing, c.wall_layers)?;
+            let x = (k as f32 + 0.5) / count as f32 * column.x;
+            solid.set_motion(SolidMotion {
+                pose: Pose {
+                    position: Vec2::new(x, column.y + 0.5 * size + 0.5 * c.spacing),
+                    angle: 0.0,
+                },
+                velocity: Vec2::new(0.0, -0.01),
+                angular_velocity: 0.0,
+            });
+            Some(solid)
+        })
+        .collect()
 }
 
 /// The dam break of `block` through the ECS for about `steps` sub-steps after the warm-up, each

@@ -5,6 +5,9 @@
 //! are the gravitational accelerations, density and pressure are 0).
 //!
 //! ```text
+//! cargo run --release --features avian --example headless -- --scenario float \
+//!     --body-shape box --body-width 0.1 --body-height 0.05 --body-density 500 --depth 0.2 \
+//!     --bodies-out bodies.csv --out float.csv
 //! cargo run --release --example headless -- --scenario dam-break --column-width 0.1 \
 //!     --column-height 0.2 --tank-width 0.8 --tank-height 0.3 --spacing 0.0025 \
 //!     --duration 1 --every 0.01 --seed 1 --out dam_break.csv
@@ -103,6 +106,46 @@ struct Cli {
     /// Galaxy: softening, m.
     #[arg(long, default_value_t = 0.01)]
     softening: f32,
+    /// Float: the body's shape.
+    #[arg(long, value_enum, default_value_t = BodyShape::Box)]
+    body_shape: BodyShape,
+    /// Float: the body's width (a circle's diameter), m.
+    #[arg(long, default_value_t = 0.1, value_parser = positive)]
+    body_width: f32,
+    /// Float: the body's height, m (a box's).
+    #[arg(long, default_value_t = 0.05, value_parser = positive)]
+    body_height: f32,
+    /// Float: the body's density, kg/m³.
+    #[arg(long, default_value_t = 500.0, value_parser = positive)]
+    body_density: f32,
+    /// Float: the body's angle at release, degrees.
+    #[arg(long, default_value_t = 0.0)]
+    body_angle: f32,
+    /// Float: the bodies' CSV, `time,id,x,y,angle,vx,vy,omega,fx,fy,torque`.
+    #[arg(long, default_value = "bodies.csv")]
+    bodies_out: String,
+}
+
+/// The floating body's shape.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum BodyShape {
+    Box,
+    Circle,
+}
+
+/// The float scenario's body: an avian body centred at the still-water level, released.
+#[derive(Clone, Debug)]
+#[cfg_attr(
+    not(feature = "avian"),
+    expect(dead_code, reason = "the float scenario is built with avian")
+)]
+struct Body {
+    shape: SolidShape,
+    /// The still water's level, m.
+    level: f32,
+    density: f32,
+    angle: f32,
+    out: String,
 }
 
 /// What the recorder simulates.
@@ -114,6 +157,9 @@ enum Scenario {
     Tank,
     /// Barnes-Hut gravity on a disc of bodies around a heavy centre (G = 1, radius 1 m).
     Galaxy,
+    /// A resting layer with one avian body released at its surface (built with `--features
+    /// avian`; writes `--bodies-out` too).
+    Float,
 }
 
 /// The fluid's pressure solver.
@@ -165,6 +211,11 @@ fn progress(len: u64, unit: &str) -> ProgressBar {
 struct Config {
     params: SphParams,
     block: FluidBlock,
+    #[cfg_attr(
+        not(feature = "avian"),
+        expect(dead_code, reason = "the float scenario is built with avian")
+    )]
+    body: Option<Body>,
     duration: f64,
     every: f64,
     out: String,
@@ -188,7 +239,7 @@ fn configure(cli: &Cli) -> Result<Config, String> {
             (FluidBlock::dam_break(w, h), h, w / 40.0)
         }
         Scenario::Galaxy => return Err("the galaxy scenario has no fluid".into()),
-        Scenario::Tank => {
+        Scenario::Tank | Scenario::Float => {
             let depth = cli.depth;
             if depth > tank.height {
                 return Err(format!(
@@ -240,13 +291,42 @@ fn configure(cli: &Cli) -> Result<Config, String> {
     {
         return Err("--duration must be non-negative and --every positive".into());
     }
+    let body = (cli.scenario == Scenario::Float)
+        .then(|| float_body(cli, &tank))
+        .transpose()?;
     Ok(Config {
         params,
+        body,
         block: block.with_jitter(cli.jitter).with_seed(cli.seed),
         duration: cli.duration,
         every: cli.every,
         out: cli.out.clone(),
         threads: threads(cli),
+    })
+}
+
+/// The float scenario's body from the command line.
+fn float_body(cli: &Cli, tank: &Tank) -> Result<Body, String> {
+    if !cfg!(feature = "avian") {
+        return Err("the float scenario needs avian: build with --features avian".into());
+    }
+    let (w, h) = (cli.body_width, cli.body_height);
+    if w >= tank.width || h >= tank.height || !cli.body_angle.is_finite() {
+        return Err(format!(
+            "the {w} m × {h} m body at {}° does not fit the tank",
+            cli.body_angle
+        ));
+    }
+    let shape = match cli.body_shape {
+        BodyShape::Box => SolidShape::rectangle(w, h),
+        BodyShape::Circle => SolidShape::circle(0.5 * w),
+    };
+    Ok(Body {
+        shape,
+        level: cli.depth,
+        density: cli.body_density,
+        angle: cli.body_angle.to_radians(),
+        out: cli.bodies_out.clone(),
     })
 }
 
@@ -277,9 +357,19 @@ fn record(config: &Config) -> std::io::Result<()> {
     .insert_resource(Time::<Fixed>::from_duration(tick))
     .insert_resource(TimeUpdateStrategy::FixedTimesteps(1));
     let ids = config.block.spawn(app.world_mut());
+    #[cfg(feature = "avian")]
+    let body = config
+        .body
+        .as_ref()
+        .map(|body| float::add(&mut app, config, body, &ids));
     app.update(); // the first update only starts the clocks
     refresh_fluid_state(app.world_mut());
 
+    #[cfg(feature = "avian")]
+    let mut bodies_out = match &config.body {
+        Some(body) => Some(float::csv(&body.out)?),
+        None => None,
+    };
     let mut out = BufWriter::new(std::fs::File::create(&config.out)?);
     writeln!(out, "time,id,x,y,vx,vy,ax,ay,mass,density,pressure")?;
     let mass = config.params.particle_mass();
@@ -295,6 +385,10 @@ fn record(config: &Config) -> std::io::Result<()> {
         bar.inc(1);
         let world = app.world_mut();
         let time = world.resource::<SphSolver>().clock().time;
+        #[cfg(feature = "avian")]
+        if let (Some(entity), Some(file)) = (body, bodies_out.as_mut()) {
+            float::row(world, entity, time, file)?;
+        }
         let mut query = world.query::<(&Position, &Velocity, &Acceleration, &Density, &Pressure)>();
         for (id, &entity) in ids.iter().enumerate() {
             let Ok((x, v, a, rho, p)) = query.get(world, entity) else {
@@ -308,6 +402,10 @@ fn record(config: &Config) -> std::io::Result<()> {
         }
     }
     out.flush()?;
+    #[cfg(feature = "avian")]
+    if let Some(file) = bodies_out.as_mut() {
+        file.flush()?;
+    }
     bar.finish_and_clear();
     let stats = app.world().resource::<SphStats>();
     eprintln!(
@@ -319,6 +417,114 @@ fn record(config: &Config) -> std::io::Result<()> {
         config.out
     );
     Ok(())
+}
+
+/// The float scenario's avian body.
+#[cfg(feature = "avian")]
+mod float {
+    use super::{Body, Config};
+    use avian2d::prelude::{
+        AngularVelocity, Collider, ColliderDensity, Gravity, LinearVelocity, PhysicsPlugins,
+        RigidBody,
+    };
+    use bevy::prelude::*;
+    use bevy_sph2d::fluid::{MovingSolid, Part, Pose, SolidMotion};
+    use bevy_sph2d::prelude::*;
+    use std::io::{BufWriter, Write};
+
+    /// Adds avian and the coupling, removes the fluid particles where the body goes, and
+    /// spawns it centred at the still-water level.
+    pub fn add(app: &mut App, config: &Config, body: &Body, fluid: &[Entity]) -> Entity {
+        let params = &config.params;
+        let tank = params.tank.expect("the float scenario has a tank");
+        let at = Vec2::new(0.5 * tank.width, body.level);
+        app.add_plugins((
+            TransformPlugin,
+            PhysicsPlugins::default(),
+            FluidCouplingPlugin,
+        ))
+        .insert_resource(Gravity(params.gravity));
+        // avian registers some of its resources in `Plugin::finish`, which `App::run` calls.
+        app.finish();
+        app.cleanup();
+        let spacing = params.particle_spacing;
+        let placed = MovingSolid::new(body.shape.clone(), Vec2::ZERO, spacing, 1).map(|mut s| {
+            let pose = Pose {
+                position: at,
+                angle: body.angle,
+            };
+            s.set_motion(SolidMotion { pose, ..default() });
+            s
+        });
+        let world = app.world_mut();
+        for &particle in fluid {
+            let x = world.get::<Position>(particle).map(|p| p.0);
+            if let (Some(x), Some(solid)) = (x, &placed)
+                && solid.distance(x).0 < 0.5 * spacing
+            {
+                world.despawn(particle);
+            }
+        }
+        let collider = match body.shape.parts.first() {
+            Some(Part::Circle { radius, .. }) => Collider::circle(*radius),
+            _ => {
+                let size = body.shape.parts.first().map_or(Vec2::ONE, extent);
+                Collider::rectangle(size.x, size.y)
+            }
+        };
+        world
+            .spawn((
+                RigidBody::Dynamic,
+                collider,
+                ColliderDensity(body.density),
+                Transform::from_translation(at.extend(0.0))
+                    .with_rotation(Quat::from_rotation_z(body.angle)),
+                FluidCoupled,
+            ))
+            .id()
+    }
+
+    /// A box part's width and height.
+    fn extent(part: &Part) -> Vec2 {
+        match part {
+            Part::Polygon { vertices } => {
+                let (lo, hi) = vertices.iter().fold(
+                    (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY)),
+                    |(lo, hi), &v| (lo.min(v), hi.max(v)),
+                );
+                hi - lo
+            }
+            _ => Vec2::ONE,
+        }
+    }
+
+    /// The bodies' CSV with its header.
+    pub fn csv(path: &str) -> std::io::Result<BufWriter<std::fs::File>> {
+        let mut file = BufWriter::new(std::fs::File::create(path)?);
+        writeln!(file, "time,id,x,y,angle,vx,vy,omega,fx,fy,torque")?;
+        Ok(file)
+    }
+
+    /// One row: the body's pose, velocities and the fluid's force and torque on it.
+    pub fn row(
+        world: &mut World,
+        body: Entity,
+        time: f64,
+        file: &mut impl Write,
+    ) -> std::io::Result<()> {
+        let mut query =
+            world.query::<(&Transform, &LinearVelocity, &AngularVelocity, &FluidForce)>();
+        let Ok((transform, v, omega, force)) = query.get(world, body) else {
+            return Ok(());
+        };
+        let angle = transform.rotation.to_euler(EulerRot::ZYX).0;
+        let (x, y) = (transform.translation.x, transform.translation.y);
+        writeln!(
+            file,
+            "{time:.6},0,{x},{y},{angle},{},{},{},{},{},{}",
+            v.0.x, v.0.y, omega.0, force.force.x, force.force.y, force.torque
+        )
+    }
 }
 
 struct GalaxyConfig {
@@ -401,6 +607,10 @@ fn record_galaxy(config: &GalaxyConfig) -> std::io::Result<()> {
         }
     }
     out.flush()?;
+    #[cfg(feature = "avian")]
+    if let Some(file) = bodies_out.as_mut() {
+        file.flush()?;
+    }
     bar.finish_and_clear();
     let stats = app.world().resource::<GravityStats>();
     eprintln!(

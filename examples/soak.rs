@@ -1,7 +1,7 @@
 //! Headless soak: a resting tank stirred for a given wall time by everything a game does to the
 //! fluid at random — pull, push and drag forces around a wandering point (the mouse tools'
 //! profiles), pouring and erasing (emitters and drains that come and go), obstacles that appear
-//! and vanish, parameter edits from the validated ranges, tilting gravity, and save/restore round
+//! and vanish, a paddle that sweeps and turns through the water, parameter edits from the validated ranges, tilting gravity, and save/restore round
 //! trips — checking after every tick that every particle is finite and inside the tank. Prints
 //! last
 //! `soak: minutes=M ticks=T particles_min=A particles_max=B nonfinite=0 escaped=0 recovered=R`
@@ -81,6 +81,27 @@ fn stir(
     }
 }
 
+/// Moves the paddle by its velocity for one tick, turning it back at the tank's walls.
+fn sweep(world: &mut World, paddle: Entity, tank: &Tank) {
+    let mut entity = world.entity_mut(paddle);
+    let mut velocity = *entity
+        .get::<SolidVelocity>()
+        .expect("the paddle has a velocity");
+    let mut transform = entity
+        .get_mut::<Transform>()
+        .expect("the paddle has a transform");
+    let at = transform.translation.truncate() + velocity.linear / 64.0;
+    if !(0.15..tank.width - 0.15).contains(&at.x) {
+        velocity.linear.x = -velocity.linear.x;
+    }
+    if !(0.15..tank.height - 0.15).contains(&at.y) {
+        velocity.linear.y = -velocity.linear.y;
+    }
+    transform.translation = at.extend(0.0);
+    transform.rotate_z(velocity.angular / 64.0);
+    entity.insert(velocity);
+}
+
 fn main() {
     let cli = Cli::parse();
     let mut rng = StdRng::seed_from_u64(cli.seed);
@@ -105,6 +126,17 @@ fn main() {
     for block in scenario.blocks(&tank) {
         block.spawn(app.world_mut());
     }
+    let paddle = app
+        .world_mut()
+        .spawn((
+            Solid::new(SolidShape::rectangle(0.04, 0.3)),
+            SolidVelocity {
+                linear: Vec2::new(0.4, 0.25),
+                angular: 1.5,
+            },
+            Transform::from_xyz(0.3 * tank.width, 0.4 * tank.height, 0.0),
+        ))
+        .id();
     app.update();
     let spacing = base.particle_spacing;
     let start_count = cli.particles as usize;
@@ -241,6 +273,7 @@ fn main() {
                 }
             }
         }
+        sweep(app.world_mut(), paddle, &tank);
         app.update();
         ticks += 1;
         // Every particle finite and in the tank (a spacing's margin for the wall's own layer).

@@ -71,6 +71,8 @@
 mod body;
 mod compute;
 mod control;
+#[cfg(feature = "avian")]
+pub mod coupling;
 #[cfg(feature = "egui")]
 pub mod demo;
 pub mod fluid;
@@ -213,9 +215,12 @@ pub mod prelude {
     pub use crate::ParticleUiPlugins;
     pub use crate::body::{Position, Velocity};
     pub use crate::control::{ResetSimulation, SimulationControl};
+    #[cfg(feature = "avian")]
+    pub use crate::coupling::{FluidCoupled, FluidCouplingPlugin};
     pub use crate::fluid::{
-        Acceleration, Density, FluidParticle, KernelKind, Obstacle, Pressure, SphParams,
-        SphParamsStatus, SphPlugin, SphStats, SphSystems, Tank,
+        Acceleration, Density, FluidForce, FluidParticle, KernelKind, Obstacle, Pressure, Solid,
+        SolidEntered, SolidLeft, SolidShape, SolidVelocity, SphParams, SphParamsStatus, SphPlugin,
+        SphStats, SphSystems, Submerged, Tank,
     };
     pub use crate::gameplay::{
         EmitterRate, FluidBlock, FluidDrain, FluidEmitter, FluidEntered, FluidLeft, FluidRegion,

@@ -244,6 +244,146 @@ impl DamBreakSettling {
     }
 }
 
+/// A box released at the still-water level of a [`RestingLayer`], free to heave, sway and roll
+/// under gravity and the fluid's force and torque ([`MovingSolid::load`]), stepped with them
+/// once a tick (semi-implicit Euler, as a rigid-body engine would): Archimedes says it floats
+/// with its bottom `relative_density × height` under the water.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FloatingBox {
+    /// The water.
+    pub layer: RestingLayer,
+    /// Box width and height, m.
+    pub size: bevy::math::Vec2,
+    /// Density over the fluid's rest density.
+    pub relative_density: f32,
+    /// Angle at release, rad.
+    pub angle: f32,
+}
+
+/// How a [`FloatingBox`] settled, averaged over the last part of the run.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct FloatReport {
+    /// How deep the box's lowest corner lies under the water level, m (the level of the free
+    /// surface away from the box, [`water_level`]).
+    pub draft: f32,
+    /// Archimedes' draft of the box upright, `relative_density × height`, m.
+    pub expected_draft: f32,
+    /// Angle at the end, rad.
+    pub angle: f32,
+    /// Submerged fraction the fluid reports at the end.
+    pub submerged_fraction: f32,
+    /// Largest box speed over the averaging, m/s.
+    pub body_speed: f32,
+    /// Fluid particles inside the box at the end.
+    pub inside: usize,
+}
+
+impl FloatingBox {
+    /// Runs it on `base` for `duration` seconds in ticks of `tick`, averaging over the last
+    /// `average`. `None` if `base` does not validate or the box cannot be sampled.
+    pub fn run(
+        &self,
+        base: SphParams,
+        duration: f64,
+        average: f64,
+        tick: f64,
+    ) -> Option<FloatReport> {
+        use crate::fluid::{MovingSolid, Pose, SolidMotion, SolidShape, coupled_acceleration};
+        let params = self.layer.params(base);
+        let c = params.constants().ok()?;
+        let shape = SolidShape::rectangle(self.size.x, self.size.y);
+        let mut solid = MovingSolid::new(shape, bevy::math::Vec2::ZERO, c.spacing, c.wall_layers)?;
+        let width = self.layer.width;
+        let start = Pose {
+            position: bevy::math::Vec2::new(0.5 * width, self.layer.depth),
+            angle: self.angle,
+        };
+        solid.set_motion(SolidMotion {
+            pose: start,
+            ..Default::default()
+        });
+        let clear = |p: &bevy::math::Vec2| solid.distance(*p).0 > 0.5 * c.spacing;
+        let positions: Vec<_> = self
+            .layer
+            .block()
+            .positions_for(&params)
+            .into_iter()
+            .filter(clear)
+            .collect();
+        let mut fluid = SliceFluid::new(c, positions, &[]);
+        fluid.solids_mut().push(solid);
+        let (w, h) = (self.size.x, self.size.y);
+        let mass = self.relative_density * c.rest_density * w * h;
+        let inertia = mass * (w * w + h * h) / 12.0;
+        let mut report = FloatReport {
+            expected_draft: self.relative_density * h,
+            ..Default::default()
+        };
+        let (mut drafts, mut samples) = (0.0f64, 0u32);
+        while fluid.clock().time < duration - 1e-9 {
+            fluid.advance(tick);
+            let body = &fluid.solids()[0];
+            let (load, mut motion) = (body.load(), body.motion());
+            let dt = tick as f32;
+            let (added, added_inertia) = body.added_mass(c.rest_density);
+            let force = load.force + mass * c.gravity;
+            let a = coupled_acceleration(mass, added, force);
+            let alpha = coupled_acceleration(inertia, added_inertia, load.torque);
+            motion.velocity += a * dt;
+            motion.angular_velocity += alpha * dt;
+            if !fluid.set_solid_motion(0, motion) || motion.velocity.length() > 100.0 {
+                break; // Thrown out of the water: the report shows it.
+            }
+            if fluid.clock().time >= duration - average - 1e-9 {
+                let corners = [(-0.5, -0.5), (0.5, -0.5), (0.5, 0.5), (-0.5, 0.5)];
+                let bottom = corners
+                    .map(|(x, y)| motion.pose.apply(bevy::math::Vec2::new(x * w, y * h)).y)
+                    .into_iter()
+                    .fold(f32::INFINITY, f32::min);
+                let level = water_level(&fluid, motion.pose.position.x, w);
+                drafts += (level - bottom) as f64;
+                samples += 1;
+                report.body_speed = report.body_speed.max(motion.velocity.length());
+            }
+        }
+        let body = &fluid.solids()[0];
+        report.draft = (drafts / samples.max(1) as f64) as f32;
+        report.angle = body.motion().pose.angle;
+        report.submerged_fraction = body.load().submerged_fraction;
+        report.inside = fluid
+            .position
+            .iter()
+            .filter(|p| body.distance(**p).0 < -0.1 * c.spacing)
+            .count();
+        Some(report)
+    }
+}
+
+/// The free surface of a layer in a tank, m: the top particle of each column one spacing wide,
+/// plus half a spacing (as a wall's surface lies half a spacing from its particles), averaged
+/// over the columns farther than `width` from `x` (where a body floats).
+pub fn water_level(fluid: &SliceFluid, x: f32, width: f32) -> f32 {
+    let c = fluid.constants();
+    let Some(tank) = c.tank else {
+        return 0.0;
+    };
+    let columns = (tank.width / c.spacing).ceil().max(1.0) as usize;
+    let mut top = vec![f32::NEG_INFINITY; columns];
+    for p in &fluid.position {
+        let k = ((p.x / c.spacing) as usize).min(columns - 1);
+        top[k] = top[k].max(p.y);
+    }
+    let (sum, count) = top
+        .iter()
+        .enumerate()
+        .filter(|(k, y)| {
+            let centre = (*k as f32 + 0.5) * c.spacing;
+            y.is_finite() && (centre - x).abs() > width
+        })
+        .fold((0.0f64, 0u32), |(s, n), (_, y)| (s + *y as f64, n + 1));
+    (sum / count.max(1) as f64) as f32 + 0.5 * c.spacing
+}
+
 /// Runs `fluid` in a tank for `duration` seconds in ticks of `tick` seconds and measures how
 /// close it came to hydrostatic rest, with pressure and density averaged per particle over the
 /// last `average` seconds (see [`LayerReport`]; `particles_deep` is the settled depth in

@@ -190,7 +190,7 @@ pub(crate) fn run_substeps(
         });
     }
     let mut solver = world.resource_mut::<SphSolver>();
-    solver.step.shared.clock.end_tick();
+    solver.step.end_tick();
     world.resource_mut::<SphStats>().tick_ms = started.elapsed().as_secs_f32() * 1000.0;
 }
 
@@ -342,6 +342,7 @@ pub fn refresh_fluid_state(world: &mut World) {
         world.run_system_cached(crate::params::apply_params::<super::SphParams>),
         world.run_system_cached(super::prepare::guard_particles),
         world.run_system_cached(super::prepare::rebuild_walls),
+        world.run_system_cached(super::solids::sync_solids),
         world.run_system_cached(refresh_stages),
     ];
     for error in results.into_iter().filter_map(Result::err) {

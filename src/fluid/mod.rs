@@ -5,6 +5,7 @@ mod driver;
 mod params;
 mod prepare;
 mod resources;
+mod solids;
 mod stats;
 
 use bevy::ecs::intern::Interned;
@@ -24,6 +25,11 @@ pub use crate::sim::grid::NeighborGrid;
 pub use crate::sim::kernels::{self, KernelKind};
 #[doc(hidden)]
 pub use crate::sim::parallel;
+pub use crate::sim::solid::{
+    ADDED_MASS_RATIO, MovingSolid, Part, Pose, SolidLoad, SolidMotion, SolidShape,
+    coupled_acceleration,
+};
+pub use crate::sim::step::WET_WEIGHT;
 pub use crate::sim::step::{Particles, SolverIterations};
 pub use crate::sim::world::SliceFluid;
 pub use components::{
@@ -35,6 +41,10 @@ pub use driver::refresh_fluid_state;
 pub(crate) use params::STANDARD_GRAVITY;
 pub use params::{SphParams, SphParamsError};
 pub use resources::{SphParamsStatus, SphSolver, SphStats};
+pub use solids::{
+    FluidForce, SOLID_ENTER_FRACTION, SOLID_LEAVE_FRACTION, Solid, SolidEntered, SolidLeft,
+    SolidVelocity, Submerged,
+};
 pub(crate) use stats::update_stats;
 
 /// SPH fluid, simulated in a fixed-step schedule ([`FixedUpdate`] by default) with a stable
@@ -160,6 +170,12 @@ impl Plugin for SphPlugin {
             .register_type::<Stiffness>()
             .register_type::<FluidIndex>()
             .register_type::<Obstacle>()
+            .register_type::<Solid>()
+            .register_type::<SolidVelocity>()
+            .register_type::<FluidForce>()
+            .register_type::<Submerged>()
+            .add_message::<SolidEntered>()
+            .add_message::<SolidLeft>()
             .insert_resource(self.params.clone())
             .init_resource::<SphSolver>()
             .init_resource::<SphStats>()
@@ -197,13 +213,14 @@ impl Plugin for SphPlugin {
                     crate::params::apply_params::<SphParams>,
                     prepare::guard_particles,
                     prepare::rebuild_walls,
+                    solids::sync_solids,
                 )
                     .chain()
                     .in_set(SphSystems::Prepare),
                 driver::run_substeps
                     .run_if(simulation_running)
                     .in_set(SphSystems::Simulate),
-                stats::update_stats.in_set(SphSystems::Finish),
+                (stats::update_stats, solids::write_solid_loads).in_set(SphSystems::Finish),
             ),
         );
         if !app.is_plugin_added::<FluidGameplayPlugin>() {

@@ -23,6 +23,8 @@ pub struct SphSolver {
     /// Particles the guard removed for a non-finite state, and for leaving the tank.
     pub(crate) removed_non_finite: u64,
     pub(crate) removed_escaped: u64,
+    /// The solids' entities, in the order of the step's solids.
+    pub(crate) solids: super::solids::SolidIndex,
 }
 
 impl Default for SphSolver {
@@ -43,6 +45,7 @@ impl SphSolver {
             walls_dirty: true,
             generation: 0,
             removed_non_finite: 0,
+            solids: Default::default(),
             removed_escaped: 0,
         }
     }

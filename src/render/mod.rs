@@ -32,7 +32,8 @@ pub use view::{ParticleCamera, ViewInsets};
 ///   range that follows the data (quantiles, eased between frames) or is set by hand;
 /// - cameras with [`ParticleCamera`] are fitted to the tank in the window area that
 ///   [`ViewInsets`] leaves free, so the tank fills the window at any size;
-/// - the tank walls and [`Obstacle`]s are outlined with gizmos;
+/// - the tank walls, [`Obstacle`]s and [`Solid`](crate::fluid::Solid)s are outlined with
+///   gizmos;
 /// - gravity bodies that are not fluid particles get sprites too, tinted by speed or mass
 ///   ([`BodyView`]).
 #[derive(Debug, Clone, Copy, Default)]
@@ -209,7 +210,7 @@ impl Plugin for ParticleRenderPlugin {
                         .in_set(ParticleRenderSystems::Sprites),
                 ),
             )
-            .add_systems(Update, draw_outlines);
+            .add_systems(Update, (draw_outlines, draw_solids));
         liquid::build(app);
     }
 
@@ -473,6 +474,31 @@ fn draw_outlines(
                     gizmos.circle_2d(Isometry2d::from_translation(end), radius, color);
                 }
             }
+        }
+    }
+}
+
+/// Outlines every [`Solid`](crate::fluid::Solid) at its pose, warm while it is in the water.
+fn draw_solids(
+    view: Res<ParticleView>,
+    solids: Query<(&crate::fluid::Solid, &Transform, &crate::fluid::Submerged)>,
+    mut gizmos: Gizmos,
+) {
+    if !view.outline {
+        return;
+    }
+    for (solid, transform, submerged) in &solids {
+        let color = if submerged.in_water {
+            Color::srgb(0.95, 0.7, 0.35)
+        } else {
+            Color::srgb(0.8, 0.8, 0.75)
+        };
+        let angle = transform.rotation.to_euler(EulerRot::ZYX).0;
+        let pose = Isometry2d::new(transform.translation.truncate(), Rot2::radians(angle));
+        for part in &solid.shape.parts {
+            let outline = part.outline(0.01);
+            let closed = outline.iter().chain(outline.first()).map(|&p| pose * p);
+            gizmos.linestrip_2d(closed, color);
         }
     }
 }

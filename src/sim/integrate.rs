@@ -2,24 +2,24 @@
 //! projection out of obstacles and back into the tank. Both drivers move every particle through
 //! these two functions.
 
-use super::boundary::Shape;
 use super::config::SphConstants;
+use super::layout::Walls;
 use bevy::math::Vec2;
 
 /// Advances one particle by `dt` (symplectic Euler: velocity first, then position with the new
-/// velocity), caps its speed, and keeps it inside the tank and out of obstacles. Returns `false`
+/// velocity), caps its speed, and keeps it inside the tank and out of obstacles and solids. Returns `false`
 /// (and leaves the particle where it was, at rest) if the result would not be finite.
 #[inline]
 pub fn advance_particle(
     c: &SphConstants,
-    obstacles: &[Shape],
+    walls: &Walls,
     position: &mut Vec2,
     velocity: &mut Vec2,
     acceleration: Vec2,
     dt: f32,
 ) -> bool {
     let v = *velocity + acceleration * dt;
-    move_particle(c, obstacles, position, velocity, v, dt)
+    move_particle(c, walls, position, velocity, v, dt)
 }
 
 /// Gives one particle the velocity `v` (capped at the speed limit) and moves it by `v dt`, keeping
@@ -28,7 +28,7 @@ pub fn advance_particle(
 #[inline]
 pub fn move_particle(
     c: &SphConstants,
-    obstacles: &[Shape],
+    walls: &Walls,
     position: &mut Vec2,
     velocity: &mut Vec2,
     mut v: Vec2,
@@ -39,9 +39,7 @@ pub fn move_particle(
         v *= c.speed_limit / speed_sq.sqrt();
     }
     let mut x = *position + v * dt;
-    for obstacle in obstacles {
-        obstacle.push_out(&mut x, &mut v, c.wall_restitution);
-    }
+    walls.push_out(&mut x, &mut v, c.wall_restitution);
     if let Some(tank) = &c.tank {
         tank.confine(&mut x, &mut v, c.wall_restitution);
     }

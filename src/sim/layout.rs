@@ -8,6 +8,7 @@ use super::boundary::Shape;
 use super::config::SphConstants;
 use super::grid::NeighborGrid;
 use super::parallel::{Parallel, chunk_size};
+use super::solid::{MovingSolid, SolidMotion};
 use bevy::math::{Mat4, Vec2, Vec4};
 use core::sync::atomic::{AtomicU64, Ordering};
 
@@ -341,16 +342,24 @@ impl FluidSnapshot {
     }
 }
 
-/// Fixed boundary particles of the tank and obstacles, cell-sorted, with the pressure the fluid
-/// currently exerts on each.
+/// Boundary particles of the tank, the static obstacles and the moving solids, cell-sorted,
+/// with the pressure the fluid currently exerts on each and (solids) their velocity.
 #[derive(Debug, Clone, Default)]
 pub(crate) struct Walls {
-    /// Positions and cell list (rebuilt only when the geometry changes).
+    /// Positions and cell list (rebuilt when the geometry changes or a solid moves).
     pub points: SortedPoints,
-    /// Densities and pressure terms (velocities stay zero), sorted.
+    /// Velocities (zero but on solids), densities and pressure terms, sorted.
     pub data: NeighborData,
     /// The obstacles the walls were sampled from, for the collision safety net.
     pub obstacles: Vec<Shape>,
+    /// The moving solids, whose boundary particles follow the fixed ones in input order.
+    pub solids: Vec<MovingSolid>,
+    /// Boundary particles of the tank and obstacles, in input order.
+    fixed: Vec<Vec2>,
+    /// The solids' motions when they were last placed (`None`: place them again).
+    placed: Option<Vec<SolidMotion>>,
+    /// Scratch: every boundary particle in input order.
+    scratch: Vec<Vec2>,
     /// Scratch for the parallel wall-pressure pass.
     states: Vec<WallState>,
 }
@@ -367,23 +376,105 @@ pub(crate) struct WallState {
 impl Walls {
     /// Samples the tank and `obstacles` into wall particles for spacing and support of `c`.
     pub fn rebuild(&mut self, c: &SphConstants, obstacles: &[Shape]) {
-        let mut points = Vec::new();
+        self.fixed.clear();
         if let Some(tank) = &c.tank {
-            tank.sample(c.spacing, c.wall_layers, &mut points);
+            tank.sample(c.spacing, c.wall_layers, &mut self.fixed);
         }
         let fits = |o: &&Shape| o.fits(c.spacing, c.wall_layers);
         for obstacle in obstacles.iter().filter(fits) {
-            obstacle.sample(c.spacing, c.wall_layers, &mut points);
+            obstacle.sample(c.spacing, c.wall_layers, &mut self.fixed);
         }
         self.obstacles = obstacles.iter().filter(fits).copied().collect();
+        self.placed = None;
+        self.place(c);
+    }
+
+    /// Places the solids' boundary particles at their poses with their point velocities, and
+    /// sorts every wall particle, unless nothing moved since the last time.
+    pub fn place(&mut self, c: &SphConstants) {
+        let motions = self.solids.iter().map(MovingSolid::motion);
+        if self
+            .placed
+            .as_ref()
+            .is_some_and(|placed| placed.iter().copied().eq(motions))
+        {
+            return;
+        }
+        self.placed = Some(self.solids.iter().map(MovingSolid::motion).collect());
+        let mut points = core::mem::take(&mut self.scratch);
+        points.clear();
+        points.extend_from_slice(&self.fixed);
+        for solid in &self.solids {
+            let pose = solid.motion().pose;
+            points.extend(solid.local_points().iter().map(|&p| pose.apply(p)));
+        }
         // Wall particles outline the whole tank: budget cells for its area, not their number.
         self.points
             .rebuild(c.support, &points, NeighborGrid::STATIC_BUDGET);
         // Most fluid particles are far from every wall; let their wall queries end at once.
         self.points.grid.mark_occupied_blocks();
         self.data.reset(points.len(), c.rest_density);
+        let mut first = self.fixed.len();
+        for solid in &self.solids {
+            let range = first..first + solid.len();
+            let slots = &self.points.grid.slot_of()[range.clone()];
+            for (&slot, &x) in slots.iter().zip(&points[range]) {
+                let v = solid.point_velocity(x);
+                (self.data.vx[slot as usize], self.data.vy[slot as usize]) = (v.x, v.y);
+            }
+            first += solid.len();
+        }
         self.states.clear();
         self.states.resize(points.len(), WallState::default());
+        self.scratch = points;
+    }
+
+    /// Forgets where the solids were placed, so the next [`place`](Self::place) sorts again
+    /// (after solids were added, removed or re-sampled).
+    pub fn solids_changed(&mut self) {
+        self.placed = None;
+    }
+
+    /// Keeps a particle out of the obstacles and the solids (see [`Shape::push_out`] and
+    /// [`MovingSolid::push_out`]).
+    #[inline]
+    pub fn push_out(&self, position: &mut Vec2, velocity: &mut Vec2, restitution: f32) {
+        for obstacle in &self.obstacles {
+            obstacle.push_out(position, velocity, restitution);
+        }
+        for solid in &self.solids {
+            solid.push_out(position, velocity, restitution);
+        }
+    }
+
+    /// Calls `visit(solid, x_b, wall_slot, fluid_slot, x_i − x_b, r²)` for every pair of a
+    /// solid's boundary particle and a fluid particle within the support, solid by solid in
+    /// the order of their particles (a fixed order: the sums are the same on any thread count).
+    pub fn for_each_solid_pair(
+        &self,
+        c: &SphConstants,
+        fluid: &FluidSnapshot,
+        mut visit: impl FnMut(usize, Vec2, usize, usize, Vec2, f32),
+    ) {
+        let tiny = 1e-12 * c.support_sq;
+        let mut first = self.fixed.len();
+        let slot_of = self.points.grid.slot_of();
+        for (k, solid) in self.solids.iter().enumerate() {
+            for &wall in &slot_of[first..first + solid.len()] {
+                let wall = wall as usize;
+                let x = self.points.get(wall);
+                fluid.points.for_each_batch(x, |start, dx, dy, r2| {
+                    let (dx, dy, r2) = (dx.to_array(), dy.to_array(), r2.to_array());
+                    for lane in 0..LANES {
+                        if r2[lane] < c.support_sq && r2[lane] > tiny {
+                            let r = Vec2::new(dx[lane], dy[lane]);
+                            visit(k, x, wall, start + lane, r, r2[lane]);
+                        }
+                    }
+                });
+            }
+            first += solid.len();
+        }
     }
 
     /// Lets `compute` fill in every wall particle's state (given the slice of states, sorted,

@@ -7,7 +7,8 @@
 //! - [`config`]: the constants and settings the passes read.
 //! - [`kernels`], [`grid`], [`layout`]: smoothing kernels, the cell grid, the cell-sorted
 //!   snapshot, the walls and the neighbour lists.
-//! - [`boundary`], [`region`]: the tank, solid shapes, and regions for drains and sensors.
+//! - [`boundary`], [`solid`], [`region`]: the tank and static shapes, moving solids, and
+//!   regions for drains and sensors.
 //! - [`density`], [`integrate`]: summation density and the particle integrator.
 //! - [`wcsph`], [`dfsph`]: the two pressure solvers.
 //! - [`step`]: the one order of a sub-step, which both drivers call.
@@ -27,6 +28,7 @@ pub mod layout;
 pub mod parallel;
 pub mod region;
 pub mod simd;
+pub mod solid;
 pub mod step;
 pub mod wcsph;
 pub mod world;

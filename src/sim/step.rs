@@ -18,8 +18,14 @@ use super::integrate::advance_particle;
 use super::kernels::RadialKernel;
 use super::layout::{FluidSnapshot, Walls};
 use super::parallel::{CHUNK, Parallel, run_jobs};
+use super::solid::{MovingSolid, SolidMotion};
 use super::wcsph::Wcsph;
 use bevy::math::Vec2;
+
+/// A solid's outline point is under water where the fluid particles' `Σ V W` there reaches this
+/// (measured: a point of the outer ring, half a spacing inside a wetted side, reads 0.13; a
+/// side's corner point about 0.25): the waterline is found to within about a spacing.
+pub const WET_WEIGHT: f32 = 0.1;
 
 /// The fluid's particles as a structure of arrays, by the driver's index (the world's vector
 /// order, the ECS query's order).
@@ -197,6 +203,11 @@ pub trait PressureStages {
         dt: f32,
         parallel: &impl Parallel,
     ) -> u64;
+
+    /// The end of [`Stage::Integrate`]: gives each solid the impulse of the sub-step of `dt`
+    /// seconds, minus what its boundary particles gave the fluid, pair by pair
+    /// ([`MovingSolid::end_substep`](super::solid::MovingSolid)).
+    fn solid_impulses(&mut self, s: &mut Shared, dt: f32);
 }
 
 /// What a solver's [`Stage::Forces`] writes into the [`Particles`] besides accelerations and
@@ -312,12 +323,62 @@ impl FluidStep {
         s.walls.rebuild(&s.constants, shapes);
     }
 
-    /// Starts a tick of `tick` seconds: the clock's, and the per-tick iteration counts.
+    /// Starts a tick of `tick` seconds: the clock's, the per-tick iteration counts and the
+    /// solids' impulses.
     pub fn begin_tick(&mut self, tick: f64) {
         let s = &mut self.shared;
         s.clock.begin_tick(tick);
         s.iterations.density = 0;
         s.iterations.divergence = 0;
+        for solid in &mut s.walls.solids {
+            solid.begin_tick();
+        }
+    }
+
+    /// Ends a tick: the clock's, and each solid's load (force and torque averaged over the
+    /// tick, and the submerged area: an outline point is wet where the fluid's
+    /// [`sample`](Self::sample) weight `Σ V W` reaches [`WET_WEIGHT`]).
+    pub fn end_tick(&mut self) {
+        self.shared.clock.end_tick();
+        let mut solids = core::mem::take(&mut self.shared.walls.solids);
+        let volume = self.shared.constants.volume;
+        for solid in &mut solids {
+            solid.end_tick(|x| self.weight(x) * volume, WET_WEIGHT);
+        }
+        self.shared.walls.solids = solids;
+    }
+
+    /// The solids in the fluid.
+    pub fn solids(&self) -> &[MovingSolid] {
+        &self.shared.walls.solids
+    }
+
+    /// The solids, to add, remove, re-sample or move: set a solid's pose and velocities with
+    /// [`MovingSolid::set_motion`] before a tick; its boundary particles follow through the sub-steps.
+    pub fn solids_mut(&mut self) -> &mut Vec<MovingSolid> {
+        self.shared.walls.solids_changed();
+        &mut self.shared.walls.solids
+    }
+
+    /// Sets solid `k`'s pose and velocities ([`MovingSolid::set_motion`]); `false` if they are
+    /// not finite or there is no such solid.
+    pub fn set_solid_motion(&mut self, k: usize, motion: SolidMotion) -> bool {
+        let solids = &mut self.shared.walls.solids;
+        solids
+            .get_mut(k)
+            .is_some_and(|solid| solid.set_motion(motion))
+    }
+
+    /// `Σ W` of the fluid particles of the last sub-step at `x`, 1/m².
+    fn weight(&self, x: Vec2) -> f32 {
+        let s = &self.shared;
+        let mut weight = 0.0f32;
+        with_kernels!(s.constants.kernel, s.constants.support, |w, _g| {
+            s.snapshot.points.for_each_batch(x, |_, _, _, r2| {
+                weight += w.value_sq_x4(r2).element_sum();
+            });
+        });
+        weight
     }
 
     /// Whether the tick wants another sub-step.
@@ -383,6 +444,7 @@ impl FluidStep {
         match stage {
             Stage::Neighbors => {
                 let c = s.constants;
+                s.walls.place(&c);
                 s.snapshot
                     .rebuild(&c, &particles.position, &particles.velocity, parallel);
             }
@@ -404,9 +466,15 @@ impl FluidStep {
                     StepLength::InTick => s.clock.take_substep(stable, max_substeps, empty),
                     StepLength::Free => s.clock.take_free_substep(stable),
                 };
-                let held_back = with_solver!(&mut self.solver, |solver| solver
-                    .integrate(s, particles, dt, parallel));
+                let held_back = with_solver!(&mut self.solver, |solver| {
+                    let held_back = solver.integrate(s, particles, dt, parallel);
+                    solver.solid_impulses(s, dt);
+                    held_back
+                });
                 s.non_finite += held_back;
+                for solid in &mut s.walls.solids {
+                    solid.advance(dt);
+                }
             }
         }
     }
@@ -416,14 +484,7 @@ impl FluidStep {
     /// `false` if the update was held back as not finite.
     pub fn advance_outsider(&self, position: &mut Vec2, velocity: &mut Vec2, a: Vec2) -> bool {
         let s = &self.shared;
-        advance_particle(
-            &s.constants,
-            &s.walls.obstacles,
-            position,
-            velocity,
-            a,
-            s.clock.dt,
-        )
+        advance_particle(&s.constants, &s.walls, position, velocity, a, s.clock.dt)
     }
 
     /// The fluid's density, velocity and pressure at `x` (m), interpolated from the particles of

@@ -100,11 +100,42 @@ impl PressureStages for Wcsph {
         dt: f32,
         parallel: &impl Parallel,
     ) -> u64 {
-        let (c, obstacles) = (s.constants, &s.walls.obstacles);
+        let (c, walls) = (s.constants, &s.walls);
         for_each_particle(particles, parallel, |_, p| {
             let (x, v, a) = (p.position, p.velocity, *p.acceleration);
-            u64::from(!advance_particle(&c, obstacles, x, v, a, dt))
+            u64::from(!advance_particle(&c, walls, x, v, a, dt))
         })
+    }
+
+    /// Minus the pressure and laminar force each solid's boundary particles put on the fluid in
+    /// the force stage (the pairs of [`acceleration_at`]), over `dt`.
+    fn solid_impulses(&mut self, s: &mut Shared, dt: f32) {
+        if s.walls.solids.is_empty() {
+            return;
+        }
+        let c = s.constants;
+        let (snapshot, walls) = (&s.snapshot, &s.walls);
+        let centers: Vec<Vec2> = walls.solids.iter().map(|b| b.world_center()).collect();
+        let mut sums = vec![(Vec2::ZERO, 0.0f32); centers.len()];
+        let eta_sq = 0.01 * c.smoothing_length * c.smoothing_length;
+        let laminar = 4.0 * c.kinematic_viscosity;
+        with_kernels!(c.kernel, c.support, |_w, g| {
+            walls.for_each_solid_pair(&c, snapshot, |k, x, wall, i, r, r2| {
+                let [_, _, vx, vy] = snapshot.kinematics[i];
+                let (rho_i, term_i) = snapshot.pressure.get(i);
+                let d = &walls.data;
+                let v = Vec2::new(vx - d.vx[wall], vy - d.vy[wall]);
+                let viscous = laminar * r2 / ((r2 + eta_sq) * (rho_i + d.density[wall]));
+                let slope = g.derivative_over_r(r2.sqrt());
+                let pair = slope * (viscous * v - (term_i + d.pressure_term[wall]) * r);
+                let force = -c.mass * c.mass * pair;
+                sums[k].0 += force;
+                sums[k].1 += (x - centers[k]).perp_dot(force);
+            });
+        });
+        for (solid, (force, torque)) in s.walls.solids.iter_mut().zip(sums) {
+            solid.end_substep(dt, force * dt, torque * dt);
+        }
     }
 }
 

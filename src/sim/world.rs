@@ -8,6 +8,7 @@ use super::clock::SubstepClock;
 use super::config::SphConstants;
 use super::dfsph::DfsphReport;
 use super::parallel::{Rayon, current};
+use super::solid::{MovingSolid, SolidMotion};
 use super::step::{FluidStep, Particles, SolverIterations, StepLength};
 use bevy::math::Vec2;
 use core::ops::{Deref, DerefMut};
@@ -74,7 +75,7 @@ impl SliceFluid {
         while self.step.wants_substep() {
             self.substep(StepLength::InTick);
         }
-        self.step.shared.clock.end_tick();
+        self.step.end_tick();
         self.step.shared.clock.substeps
     }
 
@@ -93,6 +94,22 @@ impl SliceFluid {
     /// support of each fluid particle, as of the last sub-step.
     pub fn mean_neighbors(&self) -> f64 {
         self.step.mean_neighbors()
+    }
+
+    /// The solids in the fluid (see [`FluidStep::solids`]).
+    pub fn solids(&self) -> &[MovingSolid] {
+        self.step.solids()
+    }
+
+    /// The solids, to add, remove or re-sample (see [`FluidStep::solids_mut`]).
+    pub fn solids_mut(&mut self) -> &mut Vec<MovingSolid> {
+        self.step.solids_mut()
+    }
+
+    /// Sets solid `k`'s pose and velocities for the next tick; `false` if they are not finite
+    /// or there is no such solid.
+    pub fn set_solid_motion(&mut self, k: usize, motion: SolidMotion) -> bool {
+        self.step.set_solid_motion(k, motion)
     }
 
     fn substep(&mut self, length: StepLength) -> f32 {

@@ -4,6 +4,8 @@
 mod common;
 
 mod controls;
+#[cfg(feature = "avian")]
+mod coupling;
 mod determinism;
 mod ecs_matches_slices;
 mod gravity;
@@ -13,4 +15,5 @@ mod physics;
 mod save_restore;
 mod schedule;
 mod soak;
+mod solids;
 mod sources_and_sensors;

@@ -43,6 +43,8 @@ struct FluidSums {
 struct WallSums {
     gradient: Vec2,
     viscosity: f32,
+    drag: Vec2,
+    flux: f32,
     head: Vec2,
     count: u32,
 }
@@ -113,6 +115,8 @@ impl Dfsph {
                         deficient: ((len as u32 + wall.count) as f32) < deficient_below,
                         wall_gradient: wall.gradient,
                         wall_viscosity: wall.viscosity,
+                        wall_drag: wall.drag,
+                        wall_flux: wall.flux,
                         wall_head: wall.head,
                     };
                 }
@@ -184,7 +188,7 @@ fn wall_sums<W: RadialKernel, G: RadialKernel>(
     density: &mut Vec4,
 ) -> WallSums {
     let mut sums = WallSums::default();
-    walls.points.for_each_batch(x, |_, dx, dy, r2| {
+    walls.points.for_each_batch(x, |start, dx, dy, r2| {
         *density += w.value_sq_x4(r2);
         let inside = r2.cmplt(t.support_sq) & r2.cmpgt(t.tiny);
         let mask = inside.bitmask();
@@ -200,8 +204,11 @@ fn wall_sums<W: RadialKernel, G: RadialKernel>(
         for lane in 0..4 {
             if mask & (1 << lane) != 0 {
                 let gradient = Vec2::new(gx[lane], gy[lane]);
+                let velocity = Vec2::new(walls.data.vx[start + lane], walls.data.vy[start + lane]);
                 sums.gradient += gradient;
                 sums.viscosity += friction[lane];
+                sums.drag += friction[lane] * velocity;
+                sums.flux += gradient.dot(velocity);
                 sums.head -= head[lane] * gradient;
                 sums.count += 1;
             }

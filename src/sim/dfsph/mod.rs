@@ -75,6 +75,7 @@ mod gather;
     reason = "the AVX2 sums, each unsafe block with its SAFETY note"
 )]
 mod rows;
+mod solids;
 mod solve;
 mod stages;
 
@@ -114,6 +115,11 @@ struct SlotState {
     wall_gradient: Vec2,
     /// `Σ_b V (r·∇W)/(r² + η²)` over wall particles (dimensionless, negative), for wall friction.
     wall_viscosity: f32,
+    /// `Σ_b V (r·∇W)/(r² + η²) v_b` over wall particles, m/s: the friction of moving solids.
+    wall_drag: Vec2,
+    /// `Σ_b s V ∇W_ib · v_b` over wall particles, 1/s: what moving solids add to the density
+    /// change rate (mirrored, twice it).
+    wall_flux: f32,
     /// `−Σ_b (g·(x_b − xᵢ)) s V ∇W_ib`, m/s²: the hydrostatic head of the walls' mirrored
     /// pressure (Adami et al. 2012), which a pressed particle feels on top of its own.
     wall_head: Vec2,
@@ -156,6 +162,8 @@ pub struct Dfsph {
     acceleration: SlotVectors,
     kappa: Vec<f32>,
     kappa_divergence: Vec<f32>,
+    /// The step the last divergence solve pushed with, s (zero if it did not run).
+    divergence_dt: f32,
     scratch: Scratch,
     /// The length `1/λ_max` of the solve's projected gradient steps (see
     /// [`lattice_spectral_radius`]).
@@ -272,9 +280,11 @@ impl Dfsph {
     /// sub-step's length). Returns the iterations taken.
     pub fn solve_divergence(&mut self, c: &SphConstants, dt: f32, parallel: &impl Parallel) -> u32 {
         let settings = c.dfsph;
+        self.divergence_dt = 0.0;
         if self.is_empty() || dt <= 0.0 || settings.max_divergence_iterations == 0 {
             return 0;
         }
+        self.divergence_dt = dt;
         let (iterations, error) =
             self.solve(dt, Target::Divergence, f32::INFINITY, &settings, parallel);
         self.report.divergence_iterations = iterations;
@@ -335,14 +345,15 @@ impl Dfsph {
             a += (laminar * inv * r.dot(mass_gradient)) * v
                 + (artificial * approach * inv) * mass_gradient;
         }
-        let wall = laminar * c.rest_density / (rho_i + c.rest_density) * s.wall_viscosity;
+        let wall = laminar * c.rest_density / (rho_i + c.rest_density);
+        let wall = wall * (s.wall_viscosity * vi - s.wall_drag);
         // The walls mirror a particle's pressure with the hydrostatic head (Adami et al. 2012):
         // the solves push with the particle's own stiffness (`2κᵢ g_wall`), the head follows
         // here for particles within the fluid (a full neighbourhood), not for spray. (Switched
         // by the last sub-step's pressure instead, it flickered on and off along the floor and
         // set the bottom row bouncing.)
         let head = if s.deficient { Vec2::ZERO } else { s.wall_head };
-        a + wall * vi + head + c.gravity
+        a + wall + head + c.gravity
     }
 
     /// The largest stable step (s) for the fastest particle after the divergence solve and the

@@ -384,12 +384,14 @@ fn tally(x: &Unknown, q: f32, expansion: f32) -> Tally {
     }
 }
 
-/// `Σⱼ gᵢⱼ·(uᵢ − uⱼ) + 2 g_wall,ᵢ·uᵢ`: the density change rate (1/s) of particle `slot` under
-/// the velocity field `u` (walls mirror the particle's own velocity, [`WALL_MIRROR`]).
+/// `Σⱼ gᵢⱼ·(uᵢ − uⱼ) + 2 Σ_b g_ib·(uᵢ − v_b)`: the density change rate (1/s) of particle `slot`
+/// under the velocity field `u` (walls mirror the particle's velocity about their own,
+/// [`WALL_MIRROR`]).
 #[inline(always)]
 fn density_rate(rows: &Rows, simd: Simd, s: &SlotState, slot: usize, u: &[Vec2]) -> f32 {
     let ui = u[slot];
-    WALL_MIRROR * s.wall_gradient.dot(ui) + rows.row(slot, s.count).rate(simd, u, ui)
+    WALL_MIRROR * (s.wall_gradient.dot(ui) - s.wall_flux)
+        + rows.row(slot, s.count).rate(simd, u, ui)
 }
 
 impl Dfsph {

@@ -48,6 +48,7 @@ impl PressureStages for Dfsph {
             *a = dfsph.non_pressure_acceleration(&c, snapshot, slot);
             0.0
         });
+        dfsph.solid_forces(&c, snapshot, &mut s.walls);
         let (slot_of, accelerations) = (snapshot.grid().slot_of(), &s.accelerations);
         for_each_particle(particles, parallel, |i, p| {
             let slot = slot_of[i] as usize;
@@ -81,7 +82,7 @@ impl PressureStages for Dfsph {
         s.iterations.density += iterations;
         s.iterations.total += iterations as u64;
         s.iterations.total_density += iterations as u64;
-        let (dfsph, obstacles) = (&*self, &s.walls.obstacles);
+        let (dfsph, walls) = (&*self, &s.walls);
         // The densities were written in the force stage and the solve leaves them as they are.
         for_each_particle(particles, parallel, |i, p| {
             let slot = slot_of[i] as usize;
@@ -89,8 +90,14 @@ impl PressureStages for Dfsph {
             *p.stiffness = dfsph.stiffness(slot);
             let solved = dfsph.velocity(slot);
             u64::from(!move_particle(
-                &c, obstacles, p.position, p.velocity, solved, dt,
+                &c, walls, p.position, p.velocity, solved, dt,
             ))
         })
+    }
+
+    /// Minus what the solids' boundary particles did to the fluid this sub-step.
+    fn solid_impulses(&mut self, s: &mut Shared, dt: f32) {
+        let c = s.constants;
+        Dfsph::solid_impulses(self, &c, &s.snapshot, &mut s.walls, dt);
     }
 }

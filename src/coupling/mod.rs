@@ -1,0 +1,215 @@
+//! Feature `avian`: avian2d rigid bodies in the fluid. [`FluidCouplingPlugin`] makes every body
+//! marked [`FluidCoupled`] a [`Solid`] of the fluid (its shape from the avian collider, its
+//! velocities from avian each tick) and applies the fluid's force and torque back to dynamic
+//! bodies through avian's `Forces`. Static and kinematic bodies act as still or moving walls.
+//!
+//! Order in a fixed tick: the fluid steps in the crate's schedule (`FixedUpdate` by default)
+//! with each body's pose and velocity as avian left them, and writes [`FluidForce`]; avian
+//! steps in `FixedPostUpdate` with that force applied (forces last one avian step). The
+//! exchange is explicit, once a tick, so a dynamic body is stepped with an added mass (see
+//! [`ADDED_MASS_RATIO`](crate::fluid::ADDED_MASS_RATIO)): avian is given the acceleration
+//! `a − g` with `(m + mₐ) a = F + m g`, which rests where the fluid's force alone would hold it.
+//! Keep avian's `Gravity` equal to the fluid's gravity.
+
+use crate::fluid::{
+    FluidForce, Part, Solid, SolidShape, SolidVelocity, SphParams, SphSystems, Tank,
+    coupled_acceleration,
+};
+use crate::schedule::{ParticleSchedulePlugin, ParticleSystems};
+use avian2d::parry::shape::TypedShape;
+use avian2d::prelude as avian;
+use avian2d::prelude::WriteRigidBodyForces;
+use bevy::ecs::schedule::ScheduleLabel;
+use bevy::prelude::*;
+
+/// Couples avian2d bodies marked [`FluidCoupled`] with the fluid (see the module docs). Add it
+/// beside `SphPlugin` and avian's `PhysicsPlugins`.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct FluidCouplingPlugin;
+
+/// Marks an avian body (with a `Collider` on the same entity) as a solid of the fluid.
+#[derive(Component, Reflect, Debug, Clone, Copy, Default, PartialEq)]
+#[reflect(Component, Debug, Default, PartialEq)]
+pub struct FluidCoupled;
+
+/// One of the four static avian bodies the coupling puts round the fluid's tank (so bodies
+/// rest on its floor and stay inside), re-made when the tank changes.
+#[derive(Component, Debug, Clone, Copy, PartialEq)]
+pub struct TankWall;
+
+/// How thick the tank's avian walls are, m.
+const WALL_THICKNESS: f32 = 0.5;
+
+impl Plugin for FluidCouplingPlugin {
+    fn build(&self, app: &mut App) {
+        let schedule = ParticleSchedulePlugin::ensure(app, FixedUpdate.intern());
+        app.register_type::<FluidCoupled>().add_systems(
+            schedule,
+            (
+                (tank_walls, attach_solids, copy_velocities)
+                    .chain()
+                    .in_set(ParticleSystems::Prepare)
+                    .before(SphSystems::Prepare),
+                apply_fluid_forces
+                    .in_set(ParticleSystems::Finish)
+                    .after(SphSystems::Finish),
+            ),
+        );
+    }
+}
+
+/// The shape of an avian collider as the fluid's parts, in the body's frame; `None` for
+/// shapes the fluid does not know (half-spaces, polylines, triangle meshes, height fields).
+pub fn shape_of(collider: &avian::Collider) -> Option<SolidShape> {
+    let mut parts = Vec::new();
+    add_parts(collider.shape_scaled(), Vec2::ZERO, 0.0, &mut parts)?;
+    Some(SolidShape::compound(parts))
+}
+
+/// Adds the parts of `shape`, placed at `offset` turned by `angle` in the body's frame.
+fn add_parts(
+    shape: &avian2d::parry::shape::SharedShape,
+    offset: Vec2,
+    angle: f32,
+    parts: &mut Vec<Part>,
+) -> Option<()> {
+    let place = |p: Vec2| offset + Rot2::radians(angle) * p;
+    match shape.as_typed_shape() {
+        TypedShape::Ball(ball) => parts.push(Part::Circle {
+            center: place(Vec2::ZERO),
+            radius: ball.radius,
+        }),
+        TypedShape::Cuboid(cuboid) => {
+            let size = 2.0 * cuboid.half_extents;
+            parts.push(Part::rectangle(place(Vec2::ZERO), size.x, size.y, angle));
+        }
+        TypedShape::Capsule(capsule) => parts.push(Part::Capsule {
+            start: place(capsule.segment.a),
+            end: place(capsule.segment.b),
+            radius: capsule.radius,
+        }),
+        TypedShape::ConvexPolygon(polygon) => {
+            parts.push(Part::polygon(
+                polygon.points().iter().map(|&p| place(p)).collect(),
+            ));
+        }
+        TypedShape::Compound(compound) => {
+            for (pose, shape) in compound.shapes() {
+                let at = place(pose.translation);
+                add_parts(shape, at, angle + pose.rotation.angle(), parts)?;
+            }
+        }
+        _ => return None,
+    }
+    Some(())
+}
+
+/// Puts four static avian bodies round the tank of [`SphParams`], again when it changes.
+fn tank_walls(
+    mut commands: Commands,
+    params: Res<SphParams>,
+    walls: Query<Entity, With<TankWall>>,
+    mut built: Local<Option<Option<Tank>>>,
+) {
+    if *built == Some(params.tank) {
+        return;
+    }
+    *built = Some(params.tank);
+    for wall in &walls {
+        commands.entity(wall).despawn();
+    }
+    let Some(tank) = params.tank else {
+        return;
+    };
+    let (w, h, t) = (tank.width, tank.height, WALL_THICKNESS);
+    let sides = [
+        (Vec2::new(0.5 * w, -0.5 * t), Vec2::new(w + 2.0 * t, t)),
+        (Vec2::new(0.5 * w, h + 0.5 * t), Vec2::new(w + 2.0 * t, t)),
+        (Vec2::new(-0.5 * t, 0.5 * h), Vec2::new(t, h)),
+        (Vec2::new(w + 0.5 * t, 0.5 * h), Vec2::new(t, h)),
+    ];
+    for (center, size) in sides {
+        commands.spawn((
+            TankWall,
+            avian::RigidBody::Static,
+            avian::Collider::rectangle(size.x, size.y),
+            Transform::from_translation(center.extend(0.0)),
+        ));
+    }
+}
+
+/// Gives each newly coupled body (or one whose collider changed) its [`Solid`], with the
+/// centre of mass avian computed, and keeps it awake (a sleeping body would take the fluid's
+/// force a step late).
+fn attach_solids(
+    mut commands: Commands,
+    bodies: Query<
+        (Entity, &avian::Collider, &avian::ComputedCenterOfMass),
+        (
+            With<FluidCoupled>,
+            Or<(Added<FluidCoupled>, Changed<avian::Collider>)>,
+        ),
+    >,
+) {
+    for (entity, collider, center) in &bodies {
+        let Some(shape) = shape_of(collider) else {
+            warn!("body {entity}: its collider's shape cannot be a solid of the fluid");
+            continue;
+        };
+        commands.entity(entity).insert((
+            Solid {
+                shape,
+                center_of_mass: center.0,
+            },
+            SolidVelocity::default(),
+            avian::SleepingDisabled,
+        ));
+    }
+}
+
+/// The bodies' velocities as avian left them, for the fluid's sub-steps.
+fn copy_velocities(
+    mut bodies: Query<
+        (
+            &avian::LinearVelocity,
+            &avian::AngularVelocity,
+            &mut SolidVelocity,
+        ),
+        With<FluidCoupled>,
+    >,
+) {
+    for (linear, angular, mut velocity) in &mut bodies {
+        velocity.linear = linear.0;
+        velocity.angular = angular.0;
+    }
+}
+
+/// Applies the fluid's force and torque to each dynamic coupled body, stepped with its added
+/// mass (see the module docs).
+fn apply_fluid_forces(
+    gravity: Option<Res<avian::Gravity>>,
+    mut bodies: Query<
+        (
+            &FluidForce,
+            &avian::RigidBody,
+            (&avian::ComputedMass, &avian::ComputedAngularInertia),
+            avian::Forces,
+        ),
+        With<FluidCoupled>,
+    >,
+) {
+    let g = gravity.map_or(Vec2::ZERO, |g| g.0);
+    for (fluid, body, (mass, inertia), mut forces) in &mut bodies {
+        if !body.is_dynamic() {
+            continue;
+        }
+        let (mass, inertia) = (mass.value(), inertia.value());
+        let force = fluid.force + mass * g;
+        let a = coupled_acceleration(mass, fluid.added_mass, force);
+        let alpha = coupled_acceleration(inertia, fluid.added_inertia, fluid.torque);
+        if a.is_finite() && alpha.is_finite() {
+            forces.apply_linear_acceleration(a - g);
+            forces.apply_angular_acceleration(alpha);
+        }
+    }
+}
