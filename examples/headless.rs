@@ -607,10 +607,6 @@ fn record_galaxy(config: &GalaxyConfig) -> std::io::Result<()> {
         }
     }
     out.flush()?;
-    #[cfg(feature = "avian")]
-    if let Some(file) = bodies_out.as_mut() {
-        file.flush()?;
-    }
     bar.finish_and_clear();
     let stats = app.world().resource::<GravityStats>();
     eprintln!(

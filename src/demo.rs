@@ -1,5 +1,6 @@
 //! Feature `egui`: the ready-made demo app behind the `dam_break` example (and its windowed
-//! test): a scenario in a tank, sprites, mouse tools and the panel. See [`SphDemoPlugin`].
+//! test): a scenario in a tank, sprites, mouse tools and the panel. See [`SphDemoPlugin`]. With
+//! feature `avian`, the `harbour` example's app too (`HarbourDemoPlugin`).
 
 use crate::control::ResetSimulation;
 use crate::fluid::{SphParams, SphPlugin};
@@ -7,6 +8,14 @@ use crate::gameplay::{ScenarioKind, SphScenario};
 use crate::render::{ParticleCamera, ParticleDraw, ParticleView, RenderMode};
 use crate::{ParticlePlugins, ParticleUiPlugins};
 use bevy::prelude::*;
+
+#[cfg(feature = "avian")]
+mod harbour;
+#[cfg(feature = "avian")]
+pub use harbour::{
+    HARBOUR_DEPTH, HARBOUR_TANK, HarbourDemoPlugin, HarbourScene, Paddle, PaddleStroke,
+    harbour_params,
+};
 
 /// Everything the demo needs on top of `DefaultPlugins`: [`ParticlePlugins`] with
 /// [`demo_params`], [`ParticleUiPlugins`] drawing the liquid ([`ParticleDraw::Liquid`]; `L`

@@ -6,6 +6,8 @@
 //! left mouse button above the water with `xdotool` (or, without it, by warping the pointer and
 //! pressing the button in Bevy's input), takes a screenshot, and checks that the water rose
 //! towards the cursor and that the picture is not blank. Prints the frame rates of both views.
+//! With feature `avian` it then runs the `harbour` app in a child process (`window/harbour.rs`:
+//! bodies float, the stone rests on the floor, no particle inside a body, a screenshot).
 //!
 //! Needs an X display: CI runs it under `xvfb-run` (Mesa's lavapipe renders on the CPU). Without
 //! `DISPLAY` it prints why and passes. The screenshot is kept in the target's temp folder.
@@ -87,9 +89,22 @@ enum Phase {
     Done,
 }
 
+/// Set in the child process that runs the harbour.
+#[cfg(feature = "avian")]
+const HARBOUR_ENV: &str = "SPH_WINDOW_TEST_HARBOUR";
+
+#[cfg(feature = "avian")]
+#[path = "window/harbour.rs"]
+mod harbour;
+
 fn main() {
     if std::env::var_os("DISPLAY").is_none() {
         eprintln!("window test SKIPPED: no DISPLAY; run it under xvfb-run (see .ci/run)");
+        return;
+    }
+    #[cfg(feature = "avian")]
+    if std::env::var_os(HARBOUR_ENV).is_some() {
+        harbour::main();
         return;
     }
     let xdotool = Command::new("xdotool").arg("version").output().is_ok();
@@ -136,13 +151,36 @@ fn main() {
     let exit = app.run();
     let verdict = VERDICT.lock().map(|mut v| v.take()).unwrap_or(None);
     match verdict {
-        Some(Ok(message)) if exit.is_success() => println!("window test passed: {message}"),
+        Some(Ok(message)) if exit.is_success() => {
+            println!("window test passed: {message}");
+            #[cfg(feature = "avian")]
+            run_harbour();
+        }
         Some(Err(message)) => {
             eprintln!("window test FAILED: {message}");
             std::process::exit(1);
         }
         other => {
             eprintln!("window test FAILED: app ended with {exit:?} before a verdict ({other:?})");
+            std::process::exit(1);
+        }
+    }
+}
+
+/// Runs the harbour's window test in a child process (a process opens one event loop) and
+/// fails if it does.
+#[cfg(feature = "avian")]
+fn run_harbour() {
+    // The dam break's pull has let go, and the cursor is out of the harbour's way.
+    let _ = Command::new("xdotool")
+        .args(["mouseup", "1", "mousemove", "0", "0"])
+        .status();
+    let status =
+        std::env::current_exe().and_then(|exe| Command::new(exe).env(HARBOUR_ENV, "1").status());
+    match status {
+        Ok(status) if status.success() => {}
+        other => {
+            eprintln!("window test FAILED: the harbour's run ended with {other:?}");
             std::process::exit(1);
         }
     }

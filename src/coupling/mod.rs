@@ -2,6 +2,8 @@
 //! marked [`FluidCoupled`] a [`Solid`] of the fluid (its shape from the avian collider, its
 //! velocities from avian each tick) and applies the fluid's force and torque back to dynamic
 //! bodies through avian's `Forces`. Static and kinematic bodies act as still or moving walls.
+//! With feature `render` the mouse tools act on dynamic coupled bodies as on the fluid (the
+//! drag tool grabs a crate).
 //!
 //! Order in a fixed tick: the fluid steps in the crate's schedule (`FixedUpdate` by default)
 //! with each body's pose and velocity as avian left them, and writes [`FluidForce`]; avian
@@ -10,6 +12,9 @@
 //! [`ADDED_MASS_RATIO`](crate::fluid::ADDED_MASS_RATIO)): avian is given the acceleration
 //! `a − g` with `(m + mₐ) a = F + m g`, which rests where the fluid's force alone would hold it.
 //! Keep avian's `Gravity` equal to the fluid's gravity.
+
+#[cfg(feature = "render")]
+mod pointer;
 
 use crate::fluid::{
     FluidForce, Part, Solid, SolidShape, SolidVelocity, SphParams, SphSystems, Tank,
@@ -54,6 +59,13 @@ impl Plugin for FluidCouplingPlugin {
                     .in_set(ParticleSystems::Finish)
                     .after(SphSystems::Finish),
             ),
+        );
+        #[cfg(feature = "render")]
+        app.add_systems(
+            schedule,
+            pointer::pointer_on_bodies
+                .in_set(ParticleSystems::Finish)
+                .after(apply_fluid_forces),
         );
     }
 }
@@ -138,18 +150,24 @@ fn tank_walls(
     }
 }
 
+/// Coupled bodies new this tick or whose collider changed.
+type NewOrReshaped = (
+    With<FluidCoupled>,
+    Or<(Added<FluidCoupled>, Changed<avian::Collider>)>,
+);
+
+/// A body's mass and angular inertia as avian computed them.
+type Inertia = (
+    &'static avian::ComputedMass,
+    &'static avian::ComputedAngularInertia,
+);
+
 /// Gives each newly coupled body (or one whose collider changed) its [`Solid`], with the
 /// centre of mass avian computed, and keeps it awake (a sleeping body would take the fluid's
 /// force a step late).
 fn attach_solids(
     mut commands: Commands,
-    bodies: Query<
-        (Entity, &avian::Collider, &avian::ComputedCenterOfMass),
-        (
-            With<FluidCoupled>,
-            Or<(Added<FluidCoupled>, Changed<avian::Collider>)>,
-        ),
-    >,
+    bodies: Query<(Entity, &avian::Collider, &avian::ComputedCenterOfMass), NewOrReshaped>,
 ) {
     for (entity, collider, center) in &bodies {
         let Some(shape) = shape_of(collider) else {
@@ -188,15 +206,7 @@ fn copy_velocities(
 /// mass (see the module docs).
 fn apply_fluid_forces(
     gravity: Option<Res<avian::Gravity>>,
-    mut bodies: Query<
-        (
-            &FluidForce,
-            &avian::RigidBody,
-            (&avian::ComputedMass, &avian::ComputedAngularInertia),
-            avian::Forces,
-        ),
-        With<FluidCoupled>,
-    >,
+    mut bodies: Query<(&FluidForce, &avian::RigidBody, Inertia, avian::Forces), With<FluidCoupled>>,
 ) {
     let g = gravity.map_or(Vec2::ZERO, |g| g.0);
     for (fluid, body, (mass, inertia), mut forces) in &mut bodies {

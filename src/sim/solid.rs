@@ -129,6 +129,20 @@ impl Part {
         }
     }
 
+    /// The part's area below the level line `y = level` (world, m) when placed at `pose`, m²
+    /// (curves as 64-gons).
+    pub fn area_below(&self, pose: Pose, level: f32) -> f32 {
+        let corners = match self {
+            Self::Polygon { vertices } => vertices.clone(),
+            Self::Circle { radius, .. } => self.outline(TAU * radius / 64.0),
+            Self::Capsule { start, end, radius } => {
+                self.outline((2.0 * start.distance(*end) + TAU * radius) / 64.0)
+            }
+        };
+        let world: Vec<Vec2> = corners.into_iter().map(|p| pose.apply(p)).collect();
+        shoelace(&clip_below(&world, level)).abs()
+    }
+
     /// Points round the outline, in order, about `spacing` (m) apart (to draw it; none for a
     /// circle or capsule thinner than `spacing`).
     pub fn outline(&self, spacing: f32) -> Vec<Vec2> {
@@ -222,6 +236,23 @@ impl Part {
 }
 
 /// Twice the signed area of a polygon over two, m² (positive counter-clockwise).
+/// The part of polygon `vertices` below `y = level` (Sutherland–Hodgman against one line).
+fn clip_below(vertices: &[Vec2], level: f32) -> Vec<Vec2> {
+    let n = vertices.len();
+    let mut out = Vec::with_capacity(n + 2);
+    for i in 0..n {
+        let (a, b) = (vertices[i], vertices[(i + 1) % n]);
+        if a.y <= level {
+            out.push(a);
+        }
+        if (a.y <= level) != (b.y <= level) {
+            let t = (level - a.y) / (b.y - a.y);
+            out.push(a + t * (b - a));
+        }
+    }
+    out
+}
+
 fn shoelace(vertices: &[Vec2]) -> f32 {
     let n = vertices.len();
     0.5 * (0..n)
@@ -439,6 +470,8 @@ pub struct MovingSolid {
     /// Fraction of the outline the fluid reaches at all (any fluid particle within the
     /// support) at the end of the last tick.
     contact: f32,
+    /// The sampling's spacing, m.
+    spacing: f32,
 }
 
 impl MovingSolid {
@@ -474,6 +507,7 @@ impl MovingSolid {
             pending: (Vec2::ZERO, 0.0),
             load: SolidLoad::default(),
             contact: 0.0,
+            spacing,
         })
     }
 
@@ -613,33 +647,41 @@ impl MovingSolid {
     }
 
     /// Ends a tick: the averaged force and torque, and the submerged area from `weight(x)`, the
-    /// fluid's `Σ V W` at the outline point `x` (world; wet from `wet`).
+    /// fluid's `Σ V W` at the outline point `x` (world; wet from `wet`): the area under a level
+    /// waterline through the highest wet point of the outline (a body resting on the floor in
+    /// deep water is wholly under, though the fluid cannot reach its underside).
     pub(crate) fn end_tick(&mut self, weight: impl Fn(Vec2) -> f32, wet: f32) {
         if self.elapsed > 0.0 {
             self.load.force = self.impulse / self.elapsed;
             self.load.torque = self.angular_impulse / self.elapsed;
         }
         let pose = self.motion.pose;
-        let (mut under, mut area) = (0.0, 0.0);
         let (mut touched, mut outline) = (0usize, 0usize);
-        let mut wetted = Vec::new();
-        for (part, ring) in self.shape.parts.iter().zip(&self.rings) {
-            let points = &self.local[ring.clone()];
-            wetted.clear();
-            for &p in points {
-                let w = weight(pose.apply(p));
+        let mut waterline = f32::NEG_INFINITY;
+        for ring in &self.rings {
+            for &p in &self.local[ring.clone()] {
+                let x = pose.apply(p);
+                let w = weight(x);
                 touched += usize::from(w > 0.0);
                 if w >= wet {
-                    wetted.push(p);
+                    waterline = waterline.max(x.y);
                 }
             }
-            outline += points.len();
-            // The wet points in order round the outline, closed by the waterline.
-            let ring_area = shoelace(points).max(f32::MIN_POSITIVE);
-            let fraction = (shoelace(&wetted).max(0.0) / ring_area).min(1.0);
-            under += fraction * part.area();
-            area += part.area();
+            outline += ring.len();
         }
+        // The highest wet point of the outer ring (half a spacing inside the surface) lies
+        // within a spacing under the water's surface: take the middle.
+        waterline += 0.5 * self.spacing;
+        let area = self.shape.area();
+        let under = if waterline.is_finite() {
+            self.shape
+                .parts
+                .iter()
+                .map(|part| part.area_below(pose, waterline))
+                .sum()
+        } else {
+            0.0
+        };
         self.contact = touched as f32 / outline.max(1) as f32;
         self.load.submerged_area = under;
         self.load.submerged_fraction = if area > 0.0 { under / area } else { 0.0 };
@@ -759,5 +801,19 @@ mod tests {
         let mut disc = MovingSolid::new(SolidShape::circle(0.1), Vec2::ZERO, 0.005, 3).unwrap();
         disc.end_tick(|x| if x.y < 0.0 { 1.0 } else { 0.0 }, 0.5);
         assert!((disc.load().submerged_fraction - 0.5).abs() < 0.03);
+        // Resting on the floor under deep water: the fluid does not reach its underside.
+        solid.end_tick(|x| if x.y > -0.09 { 1.0 } else { 0.0 }, 0.5);
+        assert_eq!(solid.load().submerged_fraction, 1.0);
+        // Tilted by 45° with the water at its centre: half under.
+        solid.set_motion(SolidMotion {
+            pose: Pose {
+                position: Vec2::ZERO,
+                angle: core::f32::consts::FRAC_PI_4,
+            },
+            ..Default::default()
+        });
+        solid.end_tick(|x| if x.y < -0.005 { 1.0 } else { 0.0 }, 0.5);
+        let fraction = solid.load().submerged_fraction;
+        assert!((fraction - 0.5).abs() < 0.05, "tilted: {fraction}");
     }
 }

@@ -56,24 +56,19 @@ fn clear_box(app: &mut App, center: Vec2, size: Vec2, margin: f32) {
     }
 }
 
-/// The free surface away from `x` (more than `width`): the mean top particle of each 1 cm
-/// column plus half a spacing.
-fn water_level(app: &mut App, x: f32, width: f32) -> f32 {
-    let mut top = [f32::NEG_INFINITY; 80];
-    for s in states(app) {
-        let k = ((s.position.x / 0.01) as usize).min(79);
-        top[k] = top[k].max(s.position.y);
-    }
-    let far = (0..80).filter(|&k| ((k as f32 + 0.5) * 0.01 - x).abs() > width);
-    let levels: Vec<f32> = far.map(|k| top[k]).filter(|y| y.is_finite()).collect();
-    levels.iter().sum::<f32>() / levels.len() as f32 + 0.005
+/// The still-water level of the 0.8 m wide tank, m, from the volume the fluid's particles fill
+/// at rest (a spacing squared each), the stone's (`stone`, m², resting under water) and the
+/// upright crate's part under that level (`width` wide, its bottom at `bottom`, m). Waves
+/// sloshing in the short tank move the free surface at its ends by several millimetres; the
+/// volume does not move.
+fn still_level(app: &mut App, stone: f32, width: f32, bottom: f32) -> f32 {
+    let fluid = states(app).len() as f32 * 0.01 * 0.01;
+    (fluid + stone - width * bottom) / (0.8 - width)
 }
 
 /// A crate of half the water's density released at its Archimedes draft floats through avian,
-/// upright and in the water; a stone five times as dense dropped beside it sinks and rests on
-/// the tank's floor (avian's static walls). Through avian the crate floats higher than on the
-/// plain driver (`solids::boxes_float_at_archimedes_draft`, within 3%): measured 0.033 m
-/// against 0.040 m, averaged over the last second; this holds it within a quarter.
+/// upright and in the water, at Archimedes' draft within 5% over the last second; a stone five
+/// times as dense dropped beside it sinks and rests on the tank's floor (avian's static walls).
 #[test]
 fn a_light_crate_floats_and_a_stone_rests_on_the_floor() {
     let mut app = harbour_app();
@@ -86,7 +81,8 @@ fn a_light_crate_floats_and_a_stone_rests_on_the_floor() {
         run(&mut app, 1);
         if tick >= 180 {
             let y = app.world().get::<Transform>(crate_).unwrap().translation.y;
-            drafts.push(water_level(&mut app, 0.45, 0.25) - (y - 0.5 * size.y));
+            let bottom = y - 0.5 * size.y;
+            drafts.push(still_level(&mut app, 0.06 * 0.06, size.x, bottom) - bottom);
         }
     }
     let draft = drafts.iter().sum::<f32>() / drafts.len() as f32;
@@ -102,7 +98,7 @@ fn a_light_crate_floats_and_a_stone_rests_on_the_floor() {
     let stone_y = world.get::<Transform>(stone).unwrap().translation.y;
     println!("crate draft {draft} m at {angle} rad, {floating:?}, {force:?}; stone at {stone_y} m");
     assert!(
-        (draft - 0.04).abs() < 0.01,
+        (draft - 0.04).abs() < 0.05 * 0.04,
         "crate draft {draft} m, Archimedes 0.04 m"
     );
     assert!(
