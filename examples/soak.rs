@@ -1,15 +1,18 @@
 //! Headless soak: a resting tank stirred for a given wall time by everything a game does to the
 //! fluid at random — pull, push and drag forces around a wandering point (the mouse tools'
 //! profiles), pouring and erasing (emitters and drains that come and go), obstacles that appear
-//! and vanish, a paddle that sweeps and turns through the water, parameter edits from the validated ranges, tilting gravity, and save/restore round
-//! trips — checking after every tick that every particle is finite and inside the tank. Prints
-//! last
+//! and vanish, a paddle that sweeps and turns through the water, parameter edits from the
+//! validated ranges, tilting gravity, and save/restore round trips; with feature `avian`, also
+//! three avian bodies (a crate, a barrel and a stone) tossed about in it and dropped from high
+//! up now and then — checking after every tick that every particle and body is finite and
+//! inside the tank (a non-finite or escaped body counts as one). Prints last
 //! `soak: minutes=M ticks=T particles_min=A particles_max=B nonfinite=0 escaped=0 recovered=R`
 //! (`recovered`: updates the solver held back plus particles the stability guard removed) and
 //! exits with status 1 if a particle was ever non-finite or outside the tank.
 //!
 //! ```text
 //! cargo run --release --no-default-features --example soak -- --minutes 2
+//! cargo run --release --example soak -- --minutes 2   # with avian bodies
 //! ```
 
 use bevy::prelude::*;
@@ -123,6 +126,8 @@ fn main() {
     .insert_resource(scenario)
     .init_resource::<Stir>()
     .add_systems(SphSubstep, stir.in_set(SphSubstepSystems::ExternalForces));
+    #[cfg(feature = "avian")]
+    let bodies = bodies::add(&mut app, &tank);
     for block in scenario.blocks(&tank) {
         block.spawn(app.world_mut());
     }
@@ -259,7 +264,15 @@ fn main() {
                 _ => {}
             }
             if params.validate().is_ok() {
+                #[cfg(feature = "avian")]
+                bodies::set_gravity(world, params.gravity);
                 *world.resource_mut::<SphParams>() = params;
+            }
+            #[cfg(feature = "avian")]
+            if rng.random_bool(0.1) {
+                let k = rng.random_range(0..bodies.len());
+                let at = random_point(&mut rng, 0.1);
+                bodies::drop_from(world, bodies[k], Vec2::new(at.x, tank.height - 0.1));
             }
         }
         // A save/restore round trip every ten simulated seconds.
@@ -295,6 +308,12 @@ fn main() {
         }
         low = low.min(count);
         high = high.max(count);
+        #[cfg(feature = "avian")]
+        {
+            let (bad, out) = bodies::check(world, &bodies, &tank);
+            nonfinite += bad;
+            escaped += out;
+        }
     }
     let stats = app.world().resource::<SphStats>();
     let recovered = stats.non_finite_resets + stats.removed_non_finite + stats.removed_escaped;
@@ -305,5 +324,76 @@ fn main() {
     );
     if nonfinite > 0 || escaped > 0 {
         std::process::exit(1);
+    }
+}
+
+/// Feature `avian`: three coupled avian bodies in the soak's tank.
+#[cfg(feature = "avian")]
+mod bodies {
+    use avian2d::prelude::{Collider, ColliderDensity, Gravity, PhysicsPlugins, RigidBody};
+    use bevy::prelude::*;
+    use bevy_sph2d::prelude::*;
+
+    /// Adds avian and the coupling, and spawns a crate, a barrel and a stone.
+    pub fn add(app: &mut App, tank: &Tank) -> Vec<Entity> {
+        app.add_plugins((
+            TransformPlugin,
+            PhysicsPlugins::default(),
+            FluidCouplingPlugin,
+        ));
+        app.finish();
+        app.cleanup();
+        let bodies = [
+            (Collider::rectangle(0.1, 0.1), 500.0, 0.55),
+            (Collider::circle(0.05), 700.0, 0.75),
+            (Collider::rectangle(0.06, 0.06), 3000.0, 0.9),
+        ];
+        bodies
+            .into_iter()
+            .map(|(collider, density, x)| {
+                let at = Vec2::new(x * tank.width, 0.8 * tank.height);
+                app.world_mut()
+                    .spawn((
+                        RigidBody::Dynamic,
+                        collider,
+                        ColliderDensity(density),
+                        Transform::from_translation(at.extend(0.0)),
+                        FluidCoupled,
+                    ))
+                    .id()
+            })
+            .collect()
+    }
+
+    /// Keeps avian's gravity the fluid's.
+    pub fn set_gravity(world: &mut World, gravity: Vec2) {
+        world.insert_resource(Gravity(gravity));
+    }
+
+    /// Lifts `body` to `at` and lets it fall.
+    pub fn drop_from(world: &mut World, body: Entity, at: Vec2) {
+        if let Some(mut transform) = world.get_mut::<Transform>(body) {
+            transform.translation = at.extend(0.0);
+        }
+        if let Some(mut position) = world.get_mut::<avian2d::prelude::Position>(body) {
+            position.0 = at;
+        }
+    }
+
+    /// How many bodies are not finite, and how many are outside the tank.
+    pub fn check(world: &World, bodies: &[Entity], tank: &Tank) -> (u64, u64) {
+        let (mut bad, mut out) = (0, 0);
+        for &body in bodies {
+            let Some(transform) = world.get::<Transform>(body) else {
+                continue;
+            };
+            let at = transform.translation.truncate();
+            if !at.is_finite() || !transform.rotation.is_finite() {
+                bad += 1;
+            } else if at.x < 0.0 || at.y < 0.0 || at.x > tank.width || at.y > tank.height {
+                out += 1;
+            }
+        }
+        (bad, out)
     }
 }

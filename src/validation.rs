@@ -245,7 +245,7 @@ impl DamBreakSettling {
 }
 
 /// A box released at the still-water level of a [`RestingLayer`], free to heave, sway and roll
-/// under gravity and the fluid's force and torque ([`MovingSolid::load`]), stepped with them
+/// under gravity and the fluid's force and torque ([`MovingSolid::load`](crate::fluid::MovingSolid::load)), stepped with them
 /// once a tick (semi-implicit Euler, as a rigid-body engine would): Archimedes says it floats
 /// with its bottom `relative_density × height` under the water.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -16,8 +16,8 @@ use bevy::prelude::*;
 ///
 /// The shape is sampled once into boundary particles, and again only when the component
 /// changes or the particle spacing does. A shape that is invalid or would need more than
-/// [`MAX_WALL_PARTICLES`](super::MAX_WALL_PARTICLES) boundary particles is refused with a
-/// warning.
+/// the tank's own limit of boundary particles (4 million) is refused with a warning naming
+/// its size.
 #[derive(Component, Reflect, Debug, Clone, PartialEq)]
 #[reflect(Component, Debug, PartialEq)]
 #[require(Transform, FluidForce, Submerged)]

@@ -392,7 +392,7 @@ impl SolidShape {
         rings.sum::<f64>().min(u64::MAX as f64) as u64
     }
 
-    /// Whether the shape is valid and its sampling needs at most [`MAX_BOUNDARY_PARTICLES`].
+    /// Whether the shape is valid and its sampling needs at most `MAX_BOUNDARY_PARTICLES` (4 million, the tank's own limit).
     pub fn fits(&self, spacing: f32, layers: u32) -> bool {
         self.is_valid() && self.sample_bound(spacing, layers) <= MAX_BOUNDARY_PARTICLES
     }

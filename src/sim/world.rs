@@ -96,12 +96,13 @@ impl SliceFluid {
         self.step.mean_neighbors()
     }
 
-    /// The solids in the fluid (see [`FluidStep::solids`]).
+    /// The solids in the fluid.
     pub fn solids(&self) -> &[MovingSolid] {
         self.step.solids()
     }
 
-    /// The solids, to add, remove or re-sample (see [`FluidStep::solids_mut`]).
+    /// The solids, to add, remove or re-sample; set a solid's pose and velocities with
+    /// [`MovingSolid::set_motion`] before a step.
     pub fn solids_mut(&mut self) -> &mut Vec<MovingSolid> {
         self.step.solids_mut()
     }
