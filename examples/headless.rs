@@ -512,17 +512,24 @@ mod float {
         time: f64,
         file: &mut impl Write,
     ) -> std::io::Result<()> {
-        let mut query =
-            world.query::<(&Transform, &LinearVelocity, &AngularVelocity, &FluidForce)>();
+        // Before the first tick the body is at rest and not yet a solid of the fluid.
+        let mut query = world.query::<(
+            &Transform,
+            Option<&LinearVelocity>,
+            Option<&AngularVelocity>,
+            Option<&FluidForce>,
+        )>();
         let Ok((transform, v, omega, force)) = query.get(world, body) else {
             return Ok(());
         };
+        let (v, omega) = (v.map_or(Vec2::ZERO, |v| v.0), omega.map_or(0.0, |w| w.0));
+        let force = force.copied().unwrap_or_default();
         let angle = transform.rotation.to_euler(EulerRot::ZYX).0;
         let (x, y) = (transform.translation.x, transform.translation.y);
         writeln!(
             file,
             "{time:.6},0,{x},{y},{angle},{},{},{},{},{},{}",
-            v.0.x, v.0.y, omega.0, force.force.x, force.force.y, force.torque
+            v.x, v.y, omega, force.force.x, force.force.y, force.torque
         )
     }
 }
