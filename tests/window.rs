@@ -114,31 +114,16 @@ fn main() {
     let mut demo = SphDemoPlugin::dam_break(1500);
     demo.scenario = SphScenario::new(ScenarioKind::Tank, 1500);
     let mut app = App::new();
-    app.add_plugins((
-        DefaultPlugins
-            .set(WindowPlugin {
-                primary_window: Some(Window {
-                    title: TITLE.into(),
-                    resolution: (1024, 576).into(),
-                    ..default()
-                }),
-                ..default()
-            })
-            .set(WinitPlugin {
-                run_on_any_thread: true,
-            })
-            .set(bevy_sph2d::task_pool_plugin(2)),
-        demo,
-    ))
-    .insert_resource(PointerSettings {
-        radius: 0.2,
-        ..default()
-    })
-    .insert_resource(Script {
-        xdotool,
-        ..default()
-    })
-    .add_systems(Update, script);
+    app.add_plugins((test_window_plugins(TITLE), demo))
+        .insert_resource(PointerSettings {
+            radius: 0.2,
+            ..default()
+        })
+        .insert_resource(Script {
+            xdotool,
+            ..default()
+        })
+        .add_systems(Update, script);
     // The whole demo (fluid, gravity, render, mouse tools, panel) with no ambiguous order in the
     // particle schedules: a build error panics the first tick.
     for label in [FixedUpdate.intern(), SphSubstep.intern()] {
@@ -165,6 +150,24 @@ fn main() {
             std::process::exit(1);
         }
     }
+}
+
+/// `DefaultPlugins` for a test window titled `title`: 1024 × 576, the event loop on the test's
+/// thread, two compute threads.
+fn test_window_plugins(title: &str) -> impl PluginGroup {
+    DefaultPlugins
+        .set(WindowPlugin {
+            primary_window: Some(Window {
+                title: title.into(),
+                resolution: (1024, 576).into(),
+                ..default()
+            }),
+            ..default()
+        })
+        .set(WinitPlugin {
+            run_on_any_thread: true,
+        })
+        .set(bevy_sph2d::task_pool_plugin(2))
 }
 
 /// Runs the harbour's window test in a child process (a process opens one event loop) and
