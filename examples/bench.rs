@@ -8,9 +8,14 @@
 //! ```
 //! With `--realtime`, the demo's dam break runs through the ECS for one simulated second and the
 //! last line reads
-//! `realtime solver=S particles=N threads=T sim_s=X wall_s=Y realtime_x=Z substeps_per_sim_s=K iterations_per_substep=I`
+//! `realtime solver=S particles=N threads=T sim_s=X wall_s=Y realtime_x=Z substeps_per_sim_s=K iterations_per_substep=I ns_per_particle_substep=C`
 //! (`realtime_x` is simulated seconds per wall second; iterations count both DFSPH solves and are
-//! 0 for WCSPH).
+//! 0 for WCSPH; `C` is core time, wall time × threads, per particle and sub-step). With
+//! `--density-iterations N --divergence-iterations M` the DFSPH solves run exactly that many
+//! iterations each sub-step (a fixed budget, no tolerance stop); with `--breakdown` a line per
+//! part of a sub-step comes before the last one,
+//! `breakdown part=P wall_s=X ns_per_particle_substep=C share=S%`, the part `driver` being the
+//! rest of the wall time (the ECS copies, the schedule, the tick's own work).
 //!
 //! The fluid's last two lines (three with `--hook`, the ECS again with a game system between the
 //! stages of every sub-step) read
@@ -26,7 +31,7 @@
 use bevy::prelude::*;
 use bevy::time::TimeUpdateStrategy;
 use bevy_sph2d::fluid::{MovingSolid, Pose, SliceFluid, SolidMotion, SphConstants};
-use bevy_sph2d::fluid::{PressureSolver, SphParams, SphSolver, Tank};
+use bevy_sph2d::fluid::{PressureSolver, SphParams, SphSolver, StageProfile, SubstepPart, Tank};
 use bevy_sph2d::gameplay::SCENARIO_TANK;
 use bevy_sph2d::gameplay::{FluidBlock, ScenarioKind, SphScenario};
 use bevy_sph2d::gravity::Multipole;
@@ -87,6 +92,32 @@ struct Cli {
     /// Gravity's far field: point masses, or with quadrupole moments.
     #[arg(long, value_enum, default_value_t = Expansion::Monopole)]
     multipole: Expansion,
+    /// DFSPH: exactly this many density-solve iterations per sub-step (a fixed budget, no
+    /// tolerance stop; with --divergence-iterations).
+    #[arg(long, requires = "divergence_iterations", value_parser = clap::value_parser!(u32).range(1..=10_000))]
+    density_iterations: Option<u32>,
+    /// DFSPH: exactly this many divergence-solve iterations per sub-step (0: none; with
+    /// --density-iterations).
+    #[arg(long, requires = "density_iterations", value_parser = clap::value_parser!(u32).range(0..=10_000))]
+    divergence_iterations: Option<u32>,
+    /// With --realtime: where a sub-step's time goes, a line per part before the last line.
+    #[arg(long, requires = "realtime")]
+    breakdown: bool,
+}
+
+impl Cli {
+    /// `params` with the DFSPH budget of --density-iterations and --divergence-iterations, if
+    /// given.
+    fn budgeted(&self, mut params: SphParams) -> SphParams {
+        if let (Some(density), Some(divergence)) =
+            (self.density_iterations, self.divergence_iterations)
+        {
+            params.dfsph.max_density_iterations = density;
+            params.dfsph.max_divergence_iterations = divergence;
+            params.dfsph.fixed_budget = true;
+        }
+        params
+    }
 }
 
 /// Gravity's far-field expansion.
@@ -158,7 +189,7 @@ fn main() {
     let columns = ((particles as f32 / 2.0).sqrt().round() as usize).max(1);
     let rows = particles.div_ceil(columns);
     let column = Vec2::new(columns as f32, rows as f32) * spacing;
-    let params = SphParams {
+    let params = cli.budgeted(SphParams {
         particle_spacing: spacing,
         support_ratio: cli.support_ratio,
         kernel,
@@ -167,7 +198,7 @@ fn main() {
         tank: Some(Tank::new(4.0 * column.x, 1.25 * column.y)),
         max_substeps: SUBSTEPS_PER_TICK,
         ..default()
-    };
+    });
     if let Err(error) = params.validate() {
         refuse(error);
     }
@@ -335,14 +366,14 @@ fn realtime_bench(cli: &Cli) {
         PressureSolver::Wcsph => SphParams::water_wcsph(),
         PressureSolver::Dfsph => SphParams::water(),
     };
-    let params = SphParams {
+    let params = cli.budgeted(SphParams {
         tank: Some(tank),
         particle_spacing: scenario.spacing(&tank),
         // Every sub-step the flow needs: the measure is how long they take, not what a
         // step budget would drop.
         max_substeps: 100_000,
         ..base
-    };
+    });
     if let Err(error) = params.validate() {
         refuse(error);
     }
@@ -363,6 +394,10 @@ fn realtime_bench(cli: &Cli) {
         solver.label(),
         bevy_sph2d::simd_path()
     );
+    if cli.breakdown {
+        let mut solver = app.world_mut().resource_mut::<SphSolver>();
+        solver.set_stage_profile(Some(StageProfile::new(seconds_since_start)));
+    }
     let started = Instant::now();
     let (mut density_iterations, mut divergence_iterations) = (0u64, 0u64);
     while app.world().resource::<SphSolver>().clock().time < 1.0 {
@@ -383,9 +418,26 @@ fn realtime_bench(cli: &Cli) {
             divergence_iterations as f64 / clock.total_substeps.max(1) as f64
         );
     }
+    let substeps = clock.total_substeps.max(1) as f64;
+    // Core time per particle and sub-step, ns.
+    let per_particle_substep =
+        |seconds: f64| seconds * threads as f64 * 1e9 / (count.max(1) as f64 * substeps);
+    if let Some(profile) = solver_state.stage_profile() {
+        let parts = SubstepPart::ALL.map(|part| (part.label(), profile.seconds(part)));
+        let driver = ("driver", wall - profile.total_seconds());
+        for (label, seconds) in parts.into_iter().chain([driver]) {
+            println!(
+                "breakdown part={label} wall_s={seconds:.3} ns_per_particle_substep={:.0} \
+                 share={:.1}%",
+                per_particle_substep(seconds),
+                100.0 * seconds / wall
+            );
+        }
+    }
     println!(
         "realtime solver={} particles={count} threads={threads} sim_s={:.3} wall_s={wall:.3} \
-         realtime_x={:.3} substeps_per_sim_s={:.0} iterations_per_substep={:.2}",
+         realtime_x={:.3} substeps_per_sim_s={:.0} iterations_per_substep={:.2} \
+         ns_per_particle_substep={:.0}",
         match solver {
             PressureSolver::Wcsph => "wcsph",
             PressureSolver::Dfsph => "dfsph",
@@ -393,8 +445,15 @@ fn realtime_bench(cli: &Cli) {
         clock.time,
         clock.time / wall,
         clock.total_substeps as f64 / clock.time,
-        iterations as f64 / clock.total_substeps.max(1) as f64
+        iterations as f64 / substeps,
+        per_particle_substep(wall)
     );
+}
+
+/// Seconds since the first call: the clock of the sub-steps' [`StageProfile`].
+fn seconds_since_start() -> f64 {
+    static START: std::sync::OnceLock<Instant> = std::sync::OnceLock::new();
+    START.get_or_init(Instant::now).elapsed().as_secs_f64()
 }
 
 /// Seconds per tick of the gravity plugin on a galaxy disc of `bodies` bodies.

@@ -25,6 +25,7 @@ pub use crate::sim::grid::NeighborGrid;
 pub use crate::sim::kernels::{self, KernelKind};
 #[doc(hidden)]
 pub use crate::sim::parallel;
+pub use crate::sim::profile::{StageProfile, SubstepPart};
 pub use crate::sim::solid::{
     ADDED_MASS_RATIO, MovingSolid, Part, Pose, SolidLoad, SolidMotion, SolidShape,
     coupled_acceleration,

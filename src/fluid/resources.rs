@@ -5,6 +5,7 @@ use super::params::{SphParams, SphParamsError};
 use crate::sim::clock::SubstepClock;
 use crate::sim::config::{PressureSolver, SphConstants};
 use crate::sim::dfsph::DfsphReport;
+use crate::sim::profile::StageProfile;
 use crate::sim::step::{FluidStep, Particles, SolverIterations};
 use bevy::prelude::*;
 
@@ -53,6 +54,17 @@ impl SphSolver {
     /// The constants in use: those of the last valid [`SphParams`].
     pub fn constants(&self) -> &SphConstants {
         self.step.constants()
+    }
+
+    /// Switches on the [`StageProfile`] of the sub-steps (each part's wall time from now on),
+    /// or off with `None`.
+    pub fn set_stage_profile(&mut self, profile: Option<StageProfile>) {
+        self.step.shared.profile = profile;
+    }
+
+    /// Where the sub-steps' time went since [`set_stage_profile`](Self::set_stage_profile).
+    pub fn stage_profile(&self) -> Option<&StageProfile> {
+        self.step.shared.profile.as_ref()
     }
 
     /// The sub-step clock.

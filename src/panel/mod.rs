@@ -501,6 +501,10 @@ fn dfsph_settings(ui: &mut egui::Ui, p: &mut SphParams) {
         field_slider(ui, p, row);
     }
     ui.checkbox(&mut p.dfsph.warm_start, "warm start");
+    ui.checkbox(
+        &mut p.dfsph.fixed_budget,
+        "fixed budget (no tolerance stop)",
+    );
 }
 
 fn gravity_section(ui: &mut egui::Ui, data: &mut PanelData) {

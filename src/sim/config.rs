@@ -120,6 +120,10 @@ pub struct DfsphSettings {
     pub max_divergence_iterations: u32,
     /// Start each solve from the last sub-step's pressures.
     pub warm_start: bool,
+    /// Run each solve for exactly its most iterations, without the tolerance stops (a fixed
+    /// cost per sub-step, for measuring what the rest of a sub-step costs and for solves whose
+    /// start is already close; a solve with nothing left to gain still stops).
+    pub fixed_budget: bool,
 }
 
 impl Default for DfsphSettings {
@@ -132,6 +136,7 @@ impl Default for DfsphSettings {
             max_density_iterations: 300,
             max_divergence_iterations: 100,
             warm_start: true,
+            fixed_budget: false,
         }
     }
 }

@@ -12,7 +12,8 @@
 //! - [`density`], [`integrate`]: summation density and the particle integrator.
 //! - [`wcsph`], [`dfsph`]: the two pressure solvers.
 //! - [`step`]: the one order of a sub-step, which both drivers call.
-//! - [`clock`], [`parallel`]: the sub-step clock and the slot passes over threads.
+//! - [`clock`], [`parallel`], [`profile`]: the sub-step clock, the slot passes over threads
+//!   and where a sub-step's time goes.
 //! - [`simd`], [`gravity`]: SIMD dispatch and the Barnes-Hut tree with its sums.
 
 pub mod boundary;
@@ -26,6 +27,7 @@ pub mod integrate;
 pub mod kernels;
 pub mod layout;
 pub mod parallel;
+pub mod profile;
 pub mod region;
 pub mod simd;
 pub mod solid;

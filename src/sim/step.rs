@@ -18,6 +18,7 @@ use super::integrate::advance_particle;
 use super::kernels::RadialKernel;
 use super::layout::{FluidSnapshot, Walls};
 use super::parallel::{CHUNK, Parallel, run_jobs};
+use super::profile::{StageProfile, SubstepPart};
 use super::solid::{MovingSolid, SolidMotion};
 use super::wcsph::Wcsph;
 use bevy::math::Vec2;
@@ -171,6 +172,8 @@ pub struct Shared {
     /// The largest acceleration (m/s²) of particles a driver moves outside the snapshot this
     /// sub-step (spawned between its stages): the step length counts it too.
     pub outsider_acceleration: f32,
+    /// Where the sub-steps' time goes, while a driver has switched it on.
+    pub profile: Option<StageProfile>,
 }
 
 /// A pressure solver's part of the stages of [`Stage`] (the shared parts, the snapshot and the
@@ -194,8 +197,20 @@ pub trait PressureStages {
     /// The longest stable step (s) under the largest acceleration, m/s².
     fn step_limit(&self, s: &Shared, max_acceleration: f32) -> f32;
 
-    /// [`Stage::Integrate`] after the step `dt` is chosen: moves every particle (and stores
-    /// its pressure and stiffness); returns how many updates were held back as not finite.
+    /// [`Stage::Integrate`] after the step `dt` is chosen, before the move: a pressure solve
+    /// under every particle's acceleration (DFSPH's density solve); none by default.
+    fn solve_pressure(
+        &mut self,
+        _s: &mut Shared,
+        _particles: &Particles,
+        _dt: f32,
+        _parallel: &impl Parallel,
+    ) {
+    }
+
+    /// [`Stage::Integrate`] after [`solve_pressure`](Self::solve_pressure): moves every
+    /// particle (and stores its pressure and stiffness); returns how many updates were held
+    /// back as not finite.
     fn integrate(
         &mut self,
         s: &mut Shared,
@@ -299,6 +314,7 @@ impl FluidStep {
                 iterations: SolverIterations::default(),
                 non_finite: 0,
                 outsider_acceleration: 0.0,
+                profile: None,
             },
             solver: SolverState::new(constants.solver),
         }
@@ -440,42 +456,89 @@ impl FluidStep {
         length: StepLength,
         parallel: &impl Parallel,
     ) {
-        let s = &mut self.shared;
         match stage {
-            Stage::Neighbors => {
+            Stage::Neighbors => self.timed(SubstepPart::Neighbors, |step| {
+                let s = &mut step.shared;
                 let c = s.constants;
                 s.walls.place(&c);
                 s.snapshot
                     .rebuild(&c, &particles.position, &particles.velocity, parallel);
-            }
-            Stage::Density => with_solver!(&mut self.solver, |solver| {
-                solver.density(s, particles, parallel);
-                solver.correct_velocities(s, parallel);
             }),
-            Stage::Forces => with_solver!(&mut self.solver, |solver| solver
-                .forces(s, particles, parallel)),
-            Stage::Integrate => {
-                let max_acceleration = max_length(&particles.acceleration)
-                    .max(core::mem::take(&mut s.outsider_acceleration));
-                let stable = with_solver!(&mut self.solver, |solver| solver
-                    .step_limit(s, max_acceleration));
-                s.clock.max_acceleration = max_acceleration;
-                let empty = particles.is_empty();
-                let max_substeps = s.constants.max_substeps;
-                let dt = match length {
-                    StepLength::InTick => s.clock.take_substep(stable, max_substeps, empty),
-                    StepLength::Free => s.clock.take_free_substep(stable),
-                };
-                let held_back = with_solver!(&mut self.solver, |solver| {
-                    let held_back = solver.integrate(s, particles, dt, parallel);
-                    solver.solid_impulses(s, dt);
-                    held_back
+            Stage::Density => {
+                self.timed(SubstepPart::Density, |step| {
+                    let s = &mut step.shared;
+                    with_solver!(&mut step.solver, |solver| solver
+                        .density(s, particles, parallel))
                 });
-                s.non_finite += held_back;
-                for solid in &mut s.walls.solids {
-                    solid.advance(dt);
+                self.timed(SubstepPart::DivergenceSolve, |step| {
+                    let s = &mut step.shared;
+                    with_solver!(&mut step.solver, |solver| solver
+                        .correct_velocities(s, parallel))
+                });
+            }
+            Stage::Forces => self.timed(SubstepPart::Forces, |step| {
+                let s = &mut step.shared;
+                with_solver!(&mut step.solver, |solver| solver
+                    .forces(s, particles, parallel))
+            }),
+            Stage::Integrate => {
+                let dt = self.timed(SubstepPart::Integrate, |step| {
+                    step.take_step(particles, length)
+                });
+                self.timed(SubstepPart::DensitySolve, |step| {
+                    let s = &mut step.shared;
+                    with_solver!(&mut step.solver, |solver| solver
+                        .solve_pressure(s, particles, dt, parallel))
+                });
+                self.timed(SubstepPart::Integrate, |step| {
+                    step.integrate(particles, dt, parallel);
+                });
+                if let Some(profile) = &mut self.shared.profile {
+                    profile.count_substep();
                 }
             }
+        }
+    }
+
+    /// Runs `work`, adding its wall time to `part` of the profile when one is on.
+    #[inline]
+    fn timed<R>(&mut self, part: SubstepPart, work: impl FnOnce(&mut Self) -> R) -> R {
+        let started = self.shared.profile.as_ref().map(StageProfile::now);
+        let result = work(self);
+        if let (Some(profile), Some(started)) = (&mut self.shared.profile, started) {
+            profile.add(part, started);
+        }
+        result
+    }
+
+    /// The step length of [`Stage::Integrate`] from the stability limit (the clock takes it).
+    fn take_step(&mut self, particles: &Particles, length: StepLength) -> f32 {
+        let s = &mut self.shared;
+        let max_acceleration =
+            max_length(&particles.acceleration).max(core::mem::take(&mut s.outsider_acceleration));
+        let stable = with_solver!(&mut self.solver, |solver| solver
+            .step_limit(s, max_acceleration));
+        s.clock.max_acceleration = max_acceleration;
+        let empty = particles.is_empty();
+        let max_substeps = s.constants.max_substeps;
+        match length {
+            StepLength::InTick => s.clock.take_substep(stable, max_substeps, empty),
+            StepLength::Free => s.clock.take_free_substep(stable),
+        }
+    }
+
+    /// The move of [`Stage::Integrate`] over `dt`: every particle, the solids' impulses and
+    /// their boundary particles.
+    fn integrate(&mut self, particles: &mut Particles, dt: f32, parallel: &impl Parallel) {
+        let s = &mut self.shared;
+        let held_back = with_solver!(&mut self.solver, |solver| {
+            let held_back = solver.integrate(s, particles, dt, parallel);
+            solver.solid_impulses(s, dt);
+            held_back
+        });
+        s.non_finite += held_back;
+        for solid in &mut s.walls.solids {
+            solid.advance(dt);
         }
     }
 

@@ -464,7 +464,8 @@ impl Dfsph {
         let mut next = Next::Free;
         loop {
             let mean = (tally.error_sum / n as f64) as f32;
-            if (iterations >= min_iterations && mean <= tolerance && tally.error_max <= largest)
+            let converged = mean <= tolerance && tally.error_max <= largest;
+            if (iterations >= min_iterations && converged && !settings.fixed_budget)
                 || iterations >= max_iterations
                 || !mean.is_finite()
             {

@@ -63,8 +63,27 @@ impl PressureStages for Dfsph {
         self.stable_time_step(&s.constants, max_acceleration)
     }
 
-    /// Steps 4 and 5: the density solve under every particle's acceleration (external forces
-    /// included), then each particle moves with its solved velocity and keeps its pressure and
+    /// Step 4: the density solve under every particle's acceleration (external forces
+    /// included).
+    fn solve_pressure(
+        &mut self,
+        s: &mut Shared,
+        particles: &Particles,
+        dt: f32,
+        parallel: &impl Parallel,
+    ) {
+        let c = s.constants;
+        let order = s.snapshot.grid().order();
+        for (slot, &index) in order.iter().enumerate().take(self.len()) {
+            self.set_acceleration(slot, particles.acceleration[index as usize]);
+        }
+        let iterations = self.solve_density(&c, dt, parallel);
+        s.iterations.density += iterations;
+        s.iterations.total += iterations as u64;
+        s.iterations.total_density += iterations as u64;
+    }
+
+    /// Step 5: each particle moves with its solved velocity and keeps its pressure and
     /// stiffness (its density is the force stage's).
     fn integrate(
         &mut self,
@@ -74,14 +93,7 @@ impl PressureStages for Dfsph {
         parallel: &impl Parallel,
     ) -> u64 {
         let c = s.constants;
-        let (order, slot_of) = (s.snapshot.grid().order(), s.snapshot.grid().slot_of());
-        for (slot, &index) in order.iter().enumerate().take(self.len()) {
-            self.set_acceleration(slot, particles.acceleration[index as usize]);
-        }
-        let iterations = self.solve_density(&c, dt, parallel);
-        s.iterations.density += iterations;
-        s.iterations.total += iterations as u64;
-        s.iterations.total_density += iterations as u64;
+        let slot_of = s.snapshot.grid().slot_of();
         let (dfsph, walls) = (&*self, &s.walls);
         // The densities were written in the force stage and the solve leaves them as they are.
         for_each_particle(particles, parallel, |i, p| {
