@@ -15,7 +15,8 @@
 //! iterations each sub-step (a fixed budget, no tolerance stop); with `--breakdown` a line per
 //! part of a sub-step comes before the last one,
 //! `breakdown part=P wall_s=X ns_per_particle_substep=C share=S%`, the part `driver` being the
-//! rest of the wall time (the ECS copies, the schedule, the tick's own work).
+//! fluid's tick around its sub-steps (the copies between the components and the solver) and
+//! `app` the rest of the wall time (Bevy's schedules and the fluid's other systems).
 //!
 //! The fluid's last two lines (three with `--hook`, the ECS again with a game system between the
 //! stages of every sub-step) read
@@ -400,11 +401,14 @@ fn realtime_bench(cli: &Cli) {
     }
     let started = Instant::now();
     let (mut density_iterations, mut divergence_iterations) = (0u64, 0u64);
+    // The fluid's own tick (its sub-steps and the driver's work around them), s.
+    let mut fluid_seconds = 0.0f64;
     while app.world().resource::<SphSolver>().clock().time < 1.0 {
         app.update();
         let stats = app.world().resource::<SphStats>();
         density_iterations += stats.density_iterations as u64;
         divergence_iterations += stats.divergence_iterations as u64;
+        fluid_seconds += stats.tick_ms as f64 / 1000.0;
     }
     let wall = started.elapsed().as_secs_f64();
     let solver_state = app.world().resource::<SphSolver>();
@@ -424,8 +428,9 @@ fn realtime_bench(cli: &Cli) {
         |seconds: f64| seconds * threads as f64 * 1e9 / (count.max(1) as f64 * substeps);
     if let Some(profile) = solver_state.stage_profile() {
         let parts = SubstepPart::ALL.map(|part| (part.label(), profile.seconds(part)));
-        let driver = ("driver", wall - profile.total_seconds());
-        for (label, seconds) in parts.into_iter().chain([driver]) {
+        let driver = ("driver", fluid_seconds - profile.total_seconds());
+        let app = ("app", wall - fluid_seconds);
+        for (label, seconds) in parts.into_iter().chain([driver, app]) {
             println!(
                 "breakdown part={label} wall_s={seconds:.3} ns_per_particle_substep={:.0} \
                  share={:.1}%",

@@ -64,6 +64,13 @@ pub trait RadialKernel: Copy + Send + Sync + 'static {
     /// [`value_sq`](Self::value_sq) on four lanes at once; zero beyond the support (also for
     /// `r² = ∞`).
     fn value_sq_x4(&self, r2: Vec4) -> Vec4;
+    /// [`value_sq_x4`](Self::value_sq_x4) given the distances `r = √r²` as well, bit for bit
+    /// the same: a pass that needs `r` for the gradient takes one square root, not two.
+    #[inline]
+    fn value_x4(&self, r: Vec4, r2: Vec4) -> Vec4 {
+        let _ = r;
+        self.value_sq_x4(r2)
+    }
     /// [`derivative_over_r`](Self::derivative_over_r) on four lanes at once (`r > 0`).
     fn derivative_over_r_x4(&self, r: Vec4) -> Vec4;
 }
@@ -173,7 +180,11 @@ impl RadialKernel for Spiky {
     }
     #[inline]
     fn value_sq_x4(&self, r2: Vec4) -> Vec4 {
-        let d = (Vec4::splat(self.support) - r2.sqrt()).max(Vec4::ZERO);
+        self.value_x4(r2.sqrt(), r2)
+    }
+    #[inline]
+    fn value_x4(&self, r: Vec4, _r2: Vec4) -> Vec4 {
+        let d = (Vec4::splat(self.support) - r).max(Vec4::ZERO);
         self.norm * d * d * d
     }
     #[inline]
@@ -292,7 +303,11 @@ impl RadialKernel for WendlandC2 {
     }
     #[inline]
     fn value_sq_x4(&self, r2: Vec4) -> Vec4 {
-        let q = (r2.sqrt() * self.inv_support).min(Vec4::ONE);
+        self.value_x4(r2.sqrt(), r2)
+    }
+    #[inline]
+    fn value_x4(&self, r: Vec4, _r2: Vec4) -> Vec4 {
+        let q = (r * self.inv_support).min(Vec4::ONE);
         let t = Vec4::ONE - q;
         let t2 = t * t;
         self.norm * t2 * t2 * (Vec4::ONE + 4.0 * q)
@@ -375,7 +390,11 @@ impl RadialKernel for CubicSpline {
     }
     #[inline]
     fn value_sq_x4(&self, r2: Vec4) -> Vec4 {
-        let s = r2.sqrt() * self.inv_h;
+        self.value_x4(r2.sqrt(), r2)
+    }
+    #[inline]
+    fn value_x4(&self, r: Vec4, _r2: Vec4) -> Vec4 {
+        let s = r * self.inv_h;
         let outer = (Vec4::splat(2.0) - s).max(Vec4::ZERO);
         let inner = (Vec4::ONE - s).max(Vec4::ZERO);
         self.norm * (0.25 * outer * outer * outer - inner * inner * inner)

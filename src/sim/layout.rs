@@ -199,14 +199,6 @@ impl Clone for SlotVectors {
 }
 
 impl SlotVectors {
-    /// `n` zero vectors.
-    pub fn reset(&mut self, n: usize) {
-        self.0.resize_with(n, || AtomicU64::new(0));
-        for word in &self.0 {
-            word.store(0, Ordering::Relaxed);
-        }
-    }
-
     /// Stores `value` at `slot`.
     #[inline]
     pub fn set(&self, slot: usize, value: Vec2) {

@@ -18,6 +18,8 @@ struct Terms {
     volume: f32,
     /// The squared support, m², in every lane.
     support_sq: Vec4,
+    /// The support, m, in every lane.
+    support: Vec4,
     /// Below this squared distance (m²) a pair is the particle itself.
     tiny: Vec4,
     /// `η² = 0.01 h²`, m², which keeps the wall friction finite at contact.
@@ -50,16 +52,17 @@ struct WallSums {
 }
 
 impl Dfsph {
-    /// Fills rows of `stride` entries and returns the most neighbours any particle has (more
-    /// than `stride`: the rows were short).
+    /// Fills rows of `stride` entries, and each slot's velocity and stiffnesses `[κ, κᵛ]` from
+    /// `start(slot)`, and returns the most neighbours any particle has (more than `stride`: the
+    /// rows were short).
     #[expect(clippy::too_many_arguments, reason = "one pass, spelled out")]
     pub(super) fn gather_neighbors<W: RadialKernel, G: RadialKernel>(
         &mut self,
         w: &W,
         g: &G,
         c: &SphConstants,
-        fluid: &FluidSnapshot,
-        walls: &Walls,
+        (fluid, walls): (&FluidSnapshot, &Walls),
+        start: &(impl Fn(usize) -> (Vec2, Vec2) + Sync),
         stride: usize,
         parallel: &impl Parallel,
     ) -> usize {
@@ -68,26 +71,37 @@ impl Dfsph {
             scaled_volume: c.gradient_scale * c.volume,
             volume: c.volume,
             support_sq: Vec4::splat(c.support_sq),
+            support: Vec4::splat(c.support),
             tiny: Vec4::splat(1e-12 * c.support_sq),
             eta_sq: 0.01 * c.smoothing_length * c.smoothing_length,
             gravity: c.gravity,
         };
         let deficient_below = DEFICIENT_NEIGHBORHOOD * lattice_neighbors(c) as f32;
+        let starts = self
+            .velocity
+            .chunks_mut(CHUNK)
+            .zip(self.kappa.chunks_mut(CHUNK))
+            .zip(self.kappa_divergence.chunks_mut(CHUNK));
         let mut jobs: Vec<_> = self
             .state
             .chunks_mut(CHUNK)
             .zip(self.rows.chunks_mut(CHUNK))
             .zip(self.weights.chunks_mut(CHUNK * stride))
+            .zip(starts)
             .enumerate()
-            .map(|(k, ((state, rows), weights))| (k * CHUNK, state, rows, weights, 0usize))
+            .map(|(k, (((state, rows), weights), starts))| {
+                (k * CHUNK, state, rows, weights, starts, 0usize)
+            })
             .collect();
         run_jobs(
             parallel,
             n,
             &mut jobs,
-            |(start, states, rows, weights, most)| {
+            |(first, states, rows, weights, ((velocity, kappa), kappa_divergence), most)| {
                 for (k, state) in states.iter_mut().enumerate() {
-                    let slot = *start + k;
+                    let slot = *first + k;
+                    let (v, stiffness) = start(slot);
+                    (velocity[k], kappa[k], kappa_divergence[k]) = (v, stiffness.x, stiffness.y);
                     let x = fluid.points.get(slot);
                     let row_weights = &mut weights[k * stride..(k + 1) * stride];
                     let mut sums = fluid_row(w, g, &terms, fluid, x, (rows, k), row_weights);
@@ -122,7 +136,7 @@ impl Dfsph {
                 }
             },
         );
-        jobs.iter().map(|job| job.4).max().unwrap_or(0)
+        jobs.iter().map(|job| job.5).max().unwrap_or(0)
     }
 }
 
@@ -143,14 +157,17 @@ fn fluid_row<W: RadialKernel, G: RadialKernel>(
     let mut density = Vec4::ZERO;
     let (mut sum_x, mut sum_y, mut sum_sq) = (Vec4::ZERO, Vec4::ZERO, Vec4::ZERO);
     fluid.points.for_each_batch(x, |first, dx, dy, r2| {
-        let values = w.value_sq_x4(r2);
+        // One square root for the value and the slope (inside the support `√r² ≤ H` exactly,
+        // so the slope's clamp changes only lanes the mask drops).
+        let r = r2.sqrt();
+        let values = w.value_x4(r, r2);
         density += values;
         let inside = r2.cmplt(t.support_sq) & r2.cmpgt(t.tiny);
         let mut mask = inside.bitmask();
         if mask == 0 {
             return;
         }
-        let slope = g.derivative_over_r_x4(r2.min(t.support_sq).sqrt());
+        let slope = g.derivative_over_r_x4(r.min(t.support));
         // ∇ᵢWᵢⱼ = slope (xᵢ − xⱼ) = −slope (dx, dy); zero on lanes outside.
         let scale = Vec4::select(inside, -t.scaled_volume * slope, Vec4::ZERO);
         let (gx, gy) = (scale * dx, scale * dy);
@@ -189,14 +206,15 @@ fn wall_sums<W: RadialKernel, G: RadialKernel>(
 ) -> WallSums {
     let mut sums = WallSums::default();
     walls.points.for_each_batch(x, |start, dx, dy, r2| {
-        *density += w.value_sq_x4(r2);
+        let r = r2.sqrt();
+        *density += w.value_x4(r, r2);
         let inside = r2.cmplt(t.support_sq) & r2.cmpgt(t.tiny);
         let mask = inside.bitmask();
         if mask == 0 {
             return;
         }
         let r2 = r2.min(t.support_sq);
-        let slope = g.derivative_over_r_x4(r2.sqrt());
+        let slope = g.derivative_over_r_x4(r.min(t.support));
         let gx = (-t.scaled_volume * slope * dx).to_array();
         let gy = (-t.scaled_volume * slope * dy).to_array();
         let friction = (t.volume * slope * r2 / (r2 + Vec4::splat(t.eta_sq))).to_array();

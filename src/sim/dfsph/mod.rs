@@ -15,10 +15,10 @@
 //! 3. The caller adds non-pressure accelerations ([`Dfsph::non_pressure_acceleration`]: gravity,
 //!    viscosity, the walls' hydrostatic head) and its own external forces, picks the step
 //!    ([`Dfsph::stable_time_step`]: the flow's CFL `C Δx / v_max`, with the speed the largest
-//!    pressure can give ([`pressure_speed`]) counted in `v_max`, the force and viscous limits),
-//!    and stores the accelerations with [`Dfsph::set_acceleration`].
-//! 4. [`Dfsph::solve_density`]: predicts `v* = v + dt a`, then the stiffness `κ` that brings the
-//!    predicted density `ρ̂ᵢ + dt Dρ̂ᵢ/Dt` back to one wherever it is compressed.
+//!    pressure can give ([`pressure_speed`]) counted in `v_max`, the force and viscous limits).
+//! 4. [`Dfsph::solve_density`]: predicts `v* = v + dt a` with every acceleration, then the
+//!    stiffness `κ` that brings the predicted density `ρ̂ᵢ + dt Dρ̂ᵢ/Dt` back to one wherever it
+//!    is compressed.
 //! 5. The caller moves each particle with its solved velocity ([`Dfsph::velocity`]).
 //!
 //! Both solves change velocities by the symmetric pressure force
@@ -62,7 +62,7 @@ use super::clock::SubstepClock;
 use super::config::SphConstants;
 use super::density::{max_length, with_kernels};
 use super::kernels::RadialKernel;
-use super::layout::{FluidSnapshot, SlotVectors, Walls};
+use super::layout::{FluidSnapshot, Walls};
 use super::parallel::{Parallel, for_each_slot};
 use crate::sim::simd::Simd;
 use bevy::math::{Vec2, Vec4};
@@ -159,7 +159,6 @@ pub struct Dfsph {
     weights: Vec<f32>,
     state: Vec<SlotState>,
     velocity: Vec<Vec2>,
-    acceleration: SlotVectors,
     kappa: Vec<f32>,
     kappa_divergence: Vec<f32>,
     /// The step the last divergence solve pushed with, s (zero if it did not run).
@@ -197,24 +196,18 @@ impl Dfsph {
         parallel: &impl Parallel,
     ) {
         let n = fluid.len();
-        self.state.clear();
+        // The neighbour pass writes every slot's state, velocity and stiffness.
         self.state.resize(n, SlotState::default());
-        self.velocity.clear();
-        self.velocity.extend(
-            fluid.kinematics[..n]
-                .iter()
-                .map(|&[_, _, vx, vy]| Vec2::new(vx, vy)),
-        );
-        self.acceleration.reset(n);
+        self.velocity.resize(n, Vec2::ZERO);
         self.kappa.resize(n, 0.0);
         self.kappa_divergence.resize(n, 0.0);
         self.scratch.delta.resize(n, 0.0);
         let warm = c.dfsph.warm_start;
-        for slot in 0..n {
+        let start = |slot: usize| {
+            let [_, _, vx, vy] = fluid.kinematics[slot];
             let k = if warm { warm_start(slot) } else { Vec2::ZERO };
-            self.kappa[slot] = k.x.max(0.0);
-            self.kappa_divergence[slot] = k.y.max(0.0);
-        }
+            (Vec2::new(vx, vy), k.max(Vec2::ZERO))
+        };
         // Rows a little longer than a rest neighbourhood: the iterations stream them, so they are
         // kept short. A compressed particle with more neighbours makes them long enough for the
         // most seen, and the pass runs again.
@@ -227,7 +220,7 @@ impl Dfsph {
             self.rows.resize(n, stride);
             self.weights.resize(n * stride, 0.0);
             let most = with_kernels!(c.kernel, c.support, |w, g| {
-                self.gather_neighbors(&w, &g, c, fluid, walls, stride, parallel)
+                self.gather_neighbors(&w, &g, c, (fluid, walls), &start, stride, parallel)
             });
             if most <= stride {
                 break;
@@ -292,16 +285,23 @@ impl Dfsph {
         iterations
     }
 
-    /// Step 4: predicts velocities with the stored accelerations and solves for the pressure
-    /// that keeps the density at rest after a step of `dt` seconds. Returns the iterations.
-    pub fn solve_density(&mut self, c: &SphConstants, dt: f32, parallel: &impl Parallel) -> u32 {
+    /// Step 4: predicts velocities with each particle's acceleration `acceleration(slot)` (m/s²,
+    /// by sorted slot: gravity, viscosity and external forces) and solves for the pressure that
+    /// keeps the density at rest after a step of `dt` seconds. Returns the iterations.
+    pub fn solve_density(
+        &mut self,
+        c: &SphConstants,
+        dt: f32,
+        acceleration: impl Fn(usize) -> Vec2 + Sync,
+        parallel: &impl Parallel,
+    ) -> u32 {
         if self.is_empty() || dt <= 0.0 {
             return 0;
         }
         let settings = c.dfsph;
         let mut most = 0.0f32;
         for (slot, v) in self.velocity.iter_mut().enumerate() {
-            let a = self.acceleration.get(slot);
+            let a = acceleration(slot);
             most = most.max(a.length_squared());
             *v += dt * a;
         }
@@ -329,22 +329,45 @@ impl Dfsph {
         let (xi, vi) = (fluid.points.get(slot), self.velocity[slot]);
         let rho_i = s.density * c.rest_density;
         let h = c.smoothing_length;
-        let eta_sq = 0.01 * h * h;
+        let eta_sq = Vec4::splat(0.01 * h * h);
         // m ∇W = ρ₀ g / s.
         let to_mass_gradient = c.rest_density / c.gradient_scale;
         let laminar = 4.0 * c.kinematic_viscosity;
         let artificial = 2.0 * c.artificial_viscosity * c.speed_of_sound * h;
-        let mut a = Vec2::ZERO;
-        for (j, gradient) in self.rows.neighbors(slot, s.count) {
-            let r = xi - fluid.points.get(j);
-            let v = vi - self.velocity[j];
-            let mass_gradient = to_mass_gradient * gradient;
-            let r2 = r.length_squared();
-            let inv = 1.0 / ((r2 + eta_sq) * (rho_i + self.state[j].density * c.rest_density));
-            let approach = v.dot(r).min(0.0);
-            a += (laminar * inv * r.dot(mass_gradient)) * v
-                + (artificial * approach * inv) * mass_gradient;
+        let (rest, rho_i4) = (Vec4::splat(c.rest_density), Vec4::splat(rho_i));
+        // Four neighbours a block, on lanes (the padding, the particle itself at zero
+        // gradient, adds exactly nothing).
+        let (mut ax, mut ay) = (Vec4::ZERO, Vec4::ZERO);
+        for (slots, gradients) in self.rows.row(slot, s.count).blocks() {
+            let rx = Vec4::splat(xi.x) - lanes(slots, |j| fluid.points.x[j]);
+            let ry = Vec4::splat(xi.y) - lanes(slots, |j| fluid.points.y[j]);
+            let vx = Vec4::splat(vi.x) - lanes(slots, |j| self.velocity[j].x);
+            let vy = Vec4::splat(vi.y) - lanes(slots, |j| self.velocity[j].y);
+            let gx = to_mass_gradient
+                * Vec4::new(
+                    gradients[0].x,
+                    gradients[1].x,
+                    gradients[2].x,
+                    gradients[3].x,
+                );
+            let gy = to_mass_gradient
+                * Vec4::new(
+                    gradients[0].y,
+                    gradients[1].y,
+                    gradients[2].y,
+                    gradients[3].y,
+                );
+            let r2 = rx * rx + ry * ry;
+            let rho_j = lanes(slots, |j| self.state[j].density) * rest;
+            let inv = Vec4::ONE / ((r2 + eta_sq) * (rho_i4 + rho_j));
+            let approach = (vx * rx + vy * ry).min(Vec4::ZERO);
+            let viscous = laminar * inv * (rx * gx + ry * gy);
+            let shock = artificial * approach * inv;
+            ax += viscous * vx + shock * gx;
+            ay += viscous * vy + shock * gy;
         }
+        let sum = |v: Vec4| (v.x + v.z) + (v.y + v.w);
+        let a = Vec2::new(sum(ax), sum(ay));
         let wall = laminar * c.rest_density / (rho_i + c.rest_density);
         let wall = wall * (s.wall_viscosity * vi - s.wall_drag);
         // The walls mirror a particle's pressure with the hydrostatic head (Adami et al. 2012):
@@ -364,13 +387,6 @@ impl Dfsph {
         let largest_stiffness = self.kappa.iter().fold(0.0f32, |a, &k| a.max(k));
         let speed = max_length(&self.velocity).max(pressure_speed(largest_stiffness));
         stable_time_step(c, speed, max_acceleration)
-    }
-
-    /// Stores the acceleration (m/s²) of the particle at sorted `slot` for
-    /// [`solve_density`](Self::solve_density); safe to call from parallel loops (one slot each).
-    #[inline]
-    pub fn set_acceleration(&self, slot: usize, acceleration: Vec2) {
-        self.acceleration.set(slot, acceleration);
     }
 
     /// Velocity at sorted `slot`, m/s: divergence-free after step 2, solved after step 4.
@@ -488,6 +504,20 @@ fn lattice_spectral_radius<G: RadialKernel>(g: &G, c: &SphConstants) -> f32 {
     largest
 }
 
+// A block is one lane vector.
+const _: () = assert!(BLOCK == 4);
+
+/// `value(j)` of a block's [`BLOCK`] neighbour slots, as lanes.
+#[inline(always)]
+fn lanes(slots: &[u32], value: impl Fn(usize) -> f32) -> Vec4 {
+    Vec4::new(
+        value(slots[0] as usize),
+        value(slots[1] as usize),
+        value(slots[2] as usize),
+        value(slots[3] as usize),
+    )
+}
+
 /// `Σⱼ (xᵢ + xⱼ) gᵢⱼ + 2 xᵢ g_wall,ᵢ`: the pressure acceleration of stiffness `x` on particle
 /// `slot`, per unit stiffness (walls mirror the particle's own stiffness, [`WALL_MIRROR`]).
 #[inline(always)]
@@ -548,12 +578,11 @@ mod tests {
         walls.rebuild(&c, &[]);
         let mut dfsph = Dfsph::default();
         dfsph.prepare(&c, &fluid, &walls, |_| Vec2::ZERO, &Sequential);
-        for slot in 0..fluid.len() {
-            let a = dfsph.non_pressure_acceleration(&c, &fluid, slot);
-            dfsph.set_acceleration(slot, a);
-        }
+        let accelerations: Vec<Vec2> = (0..fluid.len())
+            .map(|slot| dfsph.non_pressure_acceleration(&c, &fluid, slot))
+            .collect();
         let dt = 0.004;
-        let iterations = dfsph.solve_density(&c, dt, &Sequential);
+        let iterations = dfsph.solve_density(&c, dt, |slot| accelerations[slot], &Sequential);
         assert!(dfsph.report.density_error <= 1e-6, "{:?}", dfsph.report);
         // The free surface sits half a spacing above the top row.
         let surface = d - 0.5 * dx;

@@ -132,7 +132,16 @@ impl RowsMut<'_> {
     }
 }
 
-impl Row<'_> {
+impl<'a> Row<'a> {
+    /// The row's blocks: each one's [`BLOCK`] neighbour slots and gradients (padding included,
+    /// the particle itself at zero gradient).
+    #[inline(always)]
+    pub fn blocks(self) -> impl Iterator<Item = (&'a [u32], &'a [Vec2])> {
+        self.slot
+            .chunks_exact(BLOCK)
+            .zip(self.gradient.chunks_exact(BLOCK))
+    }
+
     /// `Σⱼ gᵢⱼ·(uᵢ − uⱼ)` over the row: the density change rate (1/s) of a velocity field `u`
     /// (m/s, by slot, at least one per particle) at a particle moving at `ui`.
     #[inline(always)]

@@ -73,11 +73,9 @@ impl PressureStages for Dfsph {
         parallel: &impl Parallel,
     ) {
         let c = s.constants;
-        let order = s.snapshot.grid().order();
-        for (slot, &index) in order.iter().enumerate().take(self.len()) {
-            self.set_acceleration(slot, particles.acceleration[index as usize]);
-        }
-        let iterations = self.solve_density(&c, dt, parallel);
+        let (order, acceleration) = (s.snapshot.grid().order(), &particles.acceleration);
+        let fetch = |slot: usize| acceleration[order[slot] as usize];
+        let iterations = self.solve_density(&c, dt, fetch, parallel);
         s.iterations.density += iterations;
         s.iterations.total += iterations as u64;
         s.iterations.total_density += iterations as u64;
