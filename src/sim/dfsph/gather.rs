@@ -2,7 +2,7 @@
 //! its cached row of fluid neighbours (slot, gradient, kernel weight), its sums over the wall
 //! particles, and the DFSPH factor.
 
-use super::rows::{BLOCK, RowsMut};
+use super::rows::RowsMut;
 use super::{DEFICIENT_NEIGHBORHOOD, Dfsph, SlotState, WALL_MIRROR, lattice_neighbors};
 use crate::sim::config::SphConstants;
 use crate::sim::kernels::RadialKernel;
@@ -38,6 +38,19 @@ struct FluidSums {
     gradient: Vec2,
     /// `Σⱼ |gᵢⱼ|²`, 1/m².
     gradient_sq: f32,
+    /// The SPH average of the stiffness over the row, when asked for ([`Smoothing`]).
+    smoothed: Option<f32>,
+}
+
+/// The SPH average `Σⱼ Vⱼ Wᵢⱼ κⱼ / Σⱼ Vⱼ Wᵢⱼ` a row sums as it is written, from the particle's
+/// own share.
+struct Smoothing<K> {
+    /// `Σ V W κ` so far, m²/s².
+    sum: f32,
+    /// `Σ V W` so far.
+    weight: f32,
+    /// The stiffness `κⱼ` of the particle at a slot, m²/s².
+    kappa: K,
 }
 
 /// What a particle's wall neighbours sum to (see [`SlotState`]).
@@ -53,8 +66,9 @@ struct WallSums {
 
 impl Dfsph {
     /// Fills rows of `stride` entries, and each slot's velocity and stiffnesses `[κ, κᵛ]` from
-    /// `start(slot)`, and returns the most neighbours any particle has (more than `stride`: the
-    /// rows were short).
+    /// `start(slot)` (with `smooth`, the particle's own kernel weight `V W(0)`, κ replaced by
+    /// its SPH average over the row: see [`Dfsph::prepare`]), and returns the most neighbours
+    /// any particle has (more than `stride`: the rows were short).
     #[expect(clippy::too_many_arguments, reason = "one pass, spelled out")]
     pub(super) fn gather_neighbors<W: RadialKernel, G: RadialKernel>(
         &mut self,
@@ -62,7 +76,7 @@ impl Dfsph {
         g: &G,
         c: &SphConstants,
         (fluid, walls): (&FluidSnapshot, &Walls),
-        start: &(impl Fn(usize) -> (Vec2, Vec2) + Sync),
+        (start, smooth): (&(impl Fn(usize) -> (Vec2, Vec2) + Sync), Option<f32>),
         stride: usize,
         parallel: &impl Parallel,
     ) -> usize {
@@ -86,25 +100,26 @@ impl Dfsph {
             .state
             .chunks_mut(CHUNK)
             .zip(self.rows.chunks_mut(CHUNK))
-            .zip(self.weights.chunks_mut(CHUNK * stride))
             .zip(starts)
             .enumerate()
-            .map(|(k, (((state, rows), weights), starts))| {
-                (k * CHUNK, state, rows, weights, starts, 0usize)
-            })
+            .map(|(k, ((state, rows), starts))| (k * CHUNK, state, rows, starts, 0usize))
             .collect();
         run_jobs(
             parallel,
             n,
             &mut jobs,
-            |(first, states, rows, weights, ((velocity, kappa), kappa_divergence), most)| {
+            |(first, states, rows, ((velocity, kappa), kappa_divergence), most)| {
                 for (k, state) in states.iter_mut().enumerate() {
                     let slot = *first + k;
                     let (v, stiffness) = start(slot);
                     (velocity[k], kappa[k], kappa_divergence[k]) = (v, stiffness.x, stiffness.y);
                     let x = fluid.points.get(slot);
-                    let row_weights = &mut weights[k * stride..(k + 1) * stride];
-                    let mut sums = fluid_row(w, g, &terms, fluid, x, (rows, k), row_weights);
+                    let smoothing = smooth.map(|own| Smoothing {
+                        sum: own * stiffness.x,
+                        weight: own,
+                        kappa: |j| start(j).1.x,
+                    });
+                    let mut sums = fluid_row(w, g, &terms, fluid, x, (rows, k, stride), smoothing);
                     let wall = wall_sums(w, g, &terms, walls, x, &mut sums.density);
                     let len = sums.count;
                     *most = (*most).max(len);
@@ -112,7 +127,9 @@ impl Dfsph {
                     // zero gradient and weight, which adds nothing to any sum over it.
                     if len <= stride {
                         rows.pad(k, len, slot);
-                        row_weights[len..len.next_multiple_of(BLOCK)].fill(0.0);
+                    }
+                    if let Some(smoothed) = sums.smoothed {
+                        kappa[k] = smoothed;
                     }
                     // A particle's own stiffness changes its density rate through its own velocity
                     // (pushed by its neighbours and the mirrored wall) and its neighbours'.
@@ -136,23 +153,22 @@ impl Dfsph {
                 }
             },
         );
-        jobs.iter().map(|job| job.5).max().unwrap_or(0)
+        jobs.iter().map(|job| job.4).max().unwrap_or(0)
     }
 }
 
-/// The fluid neighbours of the particle at `x`: writes the `k`-th row of `rows` and its kernel
-/// weights (up to the row's length) and returns the sums over all of them.
+/// The fluid neighbours of the particle at `x`: writes the `k`-th row of `rows` (up to its
+/// `stride` entries, with `smoothing` summed over them) and returns the sums over all of them.
 #[inline(always)]
-fn fluid_row<W: RadialKernel, G: RadialKernel>(
+fn fluid_row<W: RadialKernel, G: RadialKernel, K: Fn(usize) -> f32>(
     w: &W,
     g: &G,
     t: &Terms,
     fluid: &FluidSnapshot,
     x: Vec2,
-    (rows, k): (&mut RowsMut<'_>, usize),
-    row_weights: &mut [f32],
+    (rows, k, stride): (&mut RowsMut<'_>, usize, usize),
+    mut smoothing: Option<Smoothing<K>>,
 ) -> FluidSums {
-    let stride = row_weights.len();
     let mut len = 0usize;
     let mut density = Vec4::ZERO;
     let (mut sum_x, mut sum_y, mut sum_sq) = (Vec4::ZERO, Vec4::ZERO, Vec4::ZERO);
@@ -181,7 +197,10 @@ fn fluid_row<W: RadialKernel, G: RadialKernel>(
             mask &= mask - 1;
             if len < stride {
                 rows.set(k, len, first + lane, Vec2::new(gx[lane], gy[lane]));
-                row_weights[len] = values[lane];
+                if let Some(s) = &mut smoothing {
+                    s.sum += values[lane] * (s.kappa)(first + lane);
+                    s.weight += values[lane];
+                }
             }
             len += 1;
         }
@@ -191,6 +210,7 @@ fn fluid_row<W: RadialKernel, G: RadialKernel>(
         density,
         gradient: Vec2::new(sum_x.element_sum(), sum_y.element_sum()),
         gradient_sq: sum_sq.element_sum(),
+        smoothed: smoothing.map(|s| s.sum / s.weight),
     }
 }
 

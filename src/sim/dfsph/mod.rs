@@ -63,7 +63,7 @@ use super::config::SphConstants;
 use super::density::{max_length, with_kernels};
 use super::kernels::RadialKernel;
 use super::layout::{FluidSnapshot, Walls};
-use super::parallel::{Parallel, for_each_slot};
+use super::parallel::Parallel;
 use crate::sim::simd::Simd;
 use bevy::math::{Vec2, Vec4};
 use rows::{BLOCK, Rows};
@@ -154,9 +154,6 @@ pub struct DfsphReport {
 pub struct Dfsph {
     /// Each particle's cached fluid neighbours with their volume-weighted kernel gradients.
     rows: Rows,
-    /// `V Wᵢⱼ` of each cached neighbour, laid out as `rows` (the neighbour's share of the
-    /// particle's density; apart from `rows`, which the iterations read, to keep those short).
-    weights: Vec<f32>,
     state: Vec<SlotState>,
     velocity: Vec<Vec2>,
     kappa: Vec<f32>,
@@ -187,6 +184,14 @@ impl Dfsph {
     /// Step 1: caches neighbours and gradients, sums densities, computes the DFSPH factors, and
     /// takes the velocities from the snapshot. `warm_start(slot)` gives each particle's
     /// stiffness `[κ, κᵛ]` from the last sub-step (m²/s²).
+    ///
+    /// The density solve's warm start is the SPH average of `κ` over each particle's
+    /// neighbourhood (Shepard: `Σⱼ Vⱼ Wᵢⱼ κⱼ / Σⱼ Vⱼ Wᵢⱼ`, the particle included), summed in the
+    /// same pass. The pressure equations do not see a stiffness that alternates from one
+    /// particle to the next (on the lattice its push is zero), so nothing in the solve removes
+    /// it; carried from sub-step to sub-step by the warm start it grew (measured: ±300 Pa in a
+    /// resting 0.2 m layer whose floor pressure is 1,960 Pa). The average halves it every
+    /// sub-step and keeps a linear field.
     pub fn prepare(
         &mut self,
         c: &SphConstants,
@@ -218,9 +223,19 @@ impl Dfsph {
         loop {
             // Rows are written before they are read (up to each particle's count).
             self.rows.resize(n, stride);
-            self.weights.resize(n * stride, 0.0);
             let most = with_kernels!(c.kernel, c.support, |w, g| {
-                self.gather_neighbors(&w, &g, c, (fluid, walls), &start, stride, parallel)
+                // The density solve's warm start, smoothed (see above) with the particle's own
+                // weight.
+                let smooth = warm.then(|| c.volume * w.value_sq_x4(Vec4::ZERO).x);
+                self.gather_neighbors(
+                    &w,
+                    &g,
+                    c,
+                    (fluid, walls),
+                    (&start, smooth),
+                    stride,
+                    parallel,
+                )
             });
             if most <= stride {
                 break;
@@ -228,45 +243,12 @@ impl Dfsph {
             stride = (most + 4).next_multiple_of(BLOCK);
         }
         self.report = DfsphReport::default();
-        if warm {
-            self.smooth_warm_start(c, parallel);
-        }
         let key = Some((c.kernel, (c.support / c.spacing).to_bits()));
         if self.expansion_key != key {
             let radius = with_kernels!(c.kernel, c.support, |_w, g| lattice_spectral_radius(&g, c));
             self.expansion_step = 1.0 / radius.max(1.0);
             self.expansion_key = key;
         }
-    }
-
-    /// Replaces the density solve's warm start by its SPH average over each particle's
-    /// neighbourhood (Shepard: `Σⱼ Vⱼ Wᵢⱼ κⱼ / Σⱼ Vⱼ Wᵢⱼ`, the particle included). The pressure
-    /// equations do not see a stiffness that alternates from one particle to the next (on the
-    /// lattice its push is zero), so nothing in the solve removes it; carried from sub-step to
-    /// sub-step by the warm start it grew (measured: ±300 Pa in a resting 0.2 m layer whose
-    /// floor pressure is 1,960 Pa). The average halves it every sub-step and keeps a linear
-    /// field.
-    fn smooth_warm_start(&mut self, c: &SphConstants, parallel: &impl Parallel) {
-        let own = with_kernels!(c.kernel, c.support, |w, _g| c.volume
-            * w.value_sq_x4(Vec4::ZERO).x);
-        let (rows, weights) = (&self.rows, &self.weights);
-        let (state, kappa) = (&self.state, &self.kappa);
-        let stride = rows.stride();
-        let mut smoothed = core::mem::take(&mut self.scratch.delta);
-        smoothed.resize(kappa.len(), 0.0);
-        for_each_slot(&mut smoothed, parallel, |slot, out| {
-            let count = state[slot].count;
-            let (mut sum, mut weight) = (own * kappa[slot], own);
-            let row_weights = &weights[slot * stride..slot * stride + count as usize];
-            for ((j, _), &w) in rows.neighbors(slot, count).zip(row_weights) {
-                sum += w * kappa[j];
-                weight += w;
-            }
-            *out = sum / weight;
-            0.0
-        });
-        core::mem::swap(&mut self.kappa, &mut smoothed);
-        self.scratch.delta = smoothed;
     }
 
     /// Step 2: makes the velocity field divergence-free for a step of `dt` seconds (the last

@@ -100,7 +100,7 @@ impl Rows {
     }
 
     /// The `count` neighbours of the particle at `slot`: each one's slot and gradient.
-    #[inline]
+    #[cfg(test)]
     pub fn neighbors(&self, slot: usize, count: u32) -> impl Iterator<Item = (usize, Vec2)> + '_ {
         let range = slot * self.stride..slot * self.stride + count as usize;
         self.slot[range.clone()]
