@@ -7,7 +7,7 @@
 /// The parts of a sub-step a [`StageProfile`] times, in the order they run.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum SubstepPart {
-    /// The walls placed, the cell grid and the sorted snapshot ([`Stage::Neighbors`](super::step::Stage::Neighbors)).
+    /// The walls placed, the cell grid and the sorted snapshot (the neighbours stage).
     Neighbors,
     /// Densities, neighbour caches and solver factors (WCSPH: density and pressure).
     Density,
