@@ -32,7 +32,7 @@
 use super::rows::Rows;
 use super::{Dfsph, SlotState, WALL_MIRROR, pressure_push};
 use crate::sim::config::DfsphSettings;
-use crate::sim::parallel::{Parallel, fold_slots};
+use crate::sim::parallel::{Parallel, fold_slots, fold_slots2};
 use crate::sim::simd::{Simd, simd};
 use bevy::math::Vec2;
 
@@ -269,16 +269,39 @@ impl<P: Parallel> Solve<'_, P> {
         )
     }
 
-    /// Sets the errors from `velocity`, the velocities the unknowns start from, and tallies
-    /// them.
-    fn evaluate(&mut self, velocity: &[Vec2]) -> Tally {
+    /// Starts every unknown from `velocity` with no stiffness (its inverse diagonal `αᵢ/dt²`
+    /// from `inv_dt_sq`, zero where the solve leaves the particle alone) and the direction
+    /// from the warm start `kappa` (`−warm κ`, the first step), sets the errors from
+    /// `velocity`, and tallies them.
+    fn evaluate(
+        &mut self,
+        velocity: &[Vec2],
+        (kappa, warm, inv_dt_sq): (&[f32], f32, f32),
+    ) -> Tally {
         let (rows, state, simd, dt) = (self.rows, self.state, self.simd, self.dt);
         let (target, expansion) = (self.target, self.expansion);
-        fold_slots(
+        fold_slots2(
             self.unknowns,
+            self.direction,
             self.parallel,
-            |slot, x| {
+            |slot, x, p| {
                 let s = &state[slot];
+                let inverse_diagonal = if target.solves(s) {
+                    s.factor * inv_dt_sq
+                } else {
+                    0.0
+                };
+                *x = Unknown {
+                    kappa: 0.0,
+                    error: 0.0,
+                    velocity: velocity[slot],
+                    inverse_diagonal,
+                };
+                *p = if inverse_diagonal > 0.0 {
+                    -warm * kappa[slot].max(0.0)
+                } else {
+                    0.0
+                };
                 if x.inverse_diagonal > 0.0 {
                     let rate = density_rate(rows, simd, s, slot, velocity);
                     x.error = target.error(dt, rate, s);
@@ -417,32 +440,9 @@ impl Dfsph {
         };
         let warm = target.warm_start();
         let mut unknowns = core::mem::take(&mut self.scratch.unknowns);
-        unknowns.clear();
-        unknowns.extend(
-            self.state
-                .iter()
-                .zip(&self.velocity)
-                .map(|(s, &velocity)| Unknown {
-                    kappa: 0.0,
-                    error: 0.0,
-                    velocity,
-                    inverse_diagonal: if target.solves(s) {
-                        s.factor * inv_dt_sq
-                    } else {
-                        0.0
-                    },
-                }),
-        );
+        unknowns.resize(n, Unknown::default());
         let mut direction = core::mem::take(&mut self.scratch.delta);
-        direction.clear();
-        // The warm start is the first step, from zero: `κ ← 0 − 1·(−warm κ)`.
-        direction.extend(unknowns.iter().zip(kappa.iter()).map(|(x, &k)| {
-            if x.inverse_diagonal > 0.0 {
-                -warm * k.max(0.0)
-            } else {
-                0.0
-            }
-        }));
+        direction.resize(n, 0.0);
         let mut push = core::mem::take(&mut self.scratch.push);
         push.resize(n, Vec2::ZERO);
         let mut solve = Solve {
@@ -457,7 +457,7 @@ impl Dfsph {
             expansion,
             parallel,
         };
-        solve.evaluate(&self.velocity);
+        solve.evaluate(&self.velocity, (&kappa[..], warm, inv_dt_sq));
         solve.push_direction();
         let mut tally = solve.advance(1.0);
         let mut iterations = 0u32;
