@@ -1,6 +1,7 @@
 //! The neighbour pass of [`Dfsph::prepare`]: for each fluid particle, its density by summation,
-//! its cached row of fluid neighbours (slot, gradient, kernel weight), its sums over the wall
-//! particles, and the DFSPH factor.
+//! its cached row of fluid neighbours (slot, gradient), its sums over the wall particles, the
+//! DFSPH factor, its velocity, and its warm start (the density solve's smoothed over the row as
+//! it is written).
 
 use super::rows::RowsMut;
 use super::{DEFICIENT_NEIGHBORHOOD, Dfsph, SlotState, WALL_MIRROR, lattice_neighbors};
@@ -124,7 +125,7 @@ impl Dfsph {
                     let len = sums.count;
                     *most = (*most).max(len);
                     // The row is padded to whole blocks (see `Rows`) with the particle itself at
-                    // zero gradient and weight, which adds nothing to any sum over it.
+                    // zero gradient, which adds nothing to any sum over it.
                     if len <= stride {
                         rows.pad(k, len, slot);
                     }
