@@ -540,6 +540,45 @@ mod tests {
         (c, fluid, dfsph)
     }
 
+    /// The density solve's iterations on a resting layer from zero pressure: `(tolerance,
+    /// most, fixed budget)`.
+    fn resting_layer_iterations(tolerance: f32, most: u32, fixed_budget: bool) -> u32 {
+        use crate::sim::boundary::Tank;
+        let mut p = params();
+        p.tank = Some(Tank::new(0.1, 0.2));
+        p.dfsph.density_tolerance = tolerance;
+        p.dfsph.max_density_iterations = most;
+        p.dfsph.fixed_budget = fixed_budget;
+        let c = p.constants().unwrap();
+        let dx = p.particle_spacing;
+        let points: Vec<Vec2> = (0..10 * 10)
+            .map(|k| Vec2::new((k % 10) as f32 + 0.5, (k / 10) as f32 + 0.5) * dx)
+            .collect();
+        let mut fluid = FluidSnapshot::default();
+        fluid.rebuild(&c, &points, &vec![Vec2::ZERO; points.len()], &Sequential);
+        let mut walls = Walls::default();
+        walls.rebuild(&c, &[]);
+        let mut dfsph = Dfsph::default();
+        dfsph.prepare(&c, &fluid, &walls, |_| Vec2::ZERO, &Sequential);
+        let accelerations: Vec<Vec2> = (0..fluid.len())
+            .map(|slot| dfsph.non_pressure_acceleration(&c, &fluid, slot))
+            .collect();
+        dfsph.solve_density(&c, 0.004, |slot| accelerations[slot], &Sequential)
+    }
+
+    #[test]
+    fn a_fixed_budget_runs_every_iteration_and_a_tolerance_stops_early() {
+        // A loose tolerance is met within a few iterations; with a fixed budget the same solve
+        // runs all of them.
+        let stopped = resting_layer_iterations(0.05, 40, false);
+        assert!(
+            stopped < 40,
+            "the tolerance stop took {stopped} of 40 iterations"
+        );
+        assert_eq!(resting_layer_iterations(0.05, 40, true), 40);
+        assert_eq!(resting_layer_iterations(0.05, 3, true), 3);
+    }
+
     #[test]
     fn one_solve_from_rest_gives_hydrostatic_pressure() {
         use crate::sim::boundary::Tank;
