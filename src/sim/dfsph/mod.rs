@@ -512,6 +512,7 @@ fn pressure_push(rows: &Rows, simd: Simd, s: &SlotState, slot: usize, x: &[f32])
 mod tests {
     use super::*;
     use crate::fluid::{PressureSolver, SphParams};
+    use crate::sim::config::DfsphSettings;
     use crate::sim::parallel::Sequential;
 
     /// Particles on a square lattice of `n × n`, spacing `dx`, and the solver prepared on them.
@@ -540,19 +541,22 @@ mod tests {
         (c, fluid, dfsph)
     }
 
-    /// The density solve's iterations on a resting layer from zero pressure: `(tolerance,
-    /// most, fixed budget)`.
-    fn resting_layer_iterations(tolerance: f32, most: u32, fixed_budget: bool) -> u32 {
+    /// A block of `nx × ny` particles at rest on the floor of a tank `tank` wide (0.3 m
+    /// tall), with `settings` applied, after one density solve of 4 ms from zero pressure:
+    /// the constants, the snapshot, the solver and its iterations.
+    fn solve_resting_block(
+        (nx, ny): (usize, usize),
+        tank: f32,
+        settings: impl FnOnce(&mut DfsphSettings),
+    ) -> (SphConstants, FluidSnapshot, Dfsph, u32) {
         use crate::sim::boundary::Tank;
         let mut p = params();
-        p.tank = Some(Tank::new(0.1, 0.2));
-        p.dfsph.density_tolerance = tolerance;
-        p.dfsph.max_density_iterations = most;
-        p.dfsph.fixed_budget = fixed_budget;
+        p.tank = Some(Tank::new(tank, 0.3));
+        settings(&mut p.dfsph);
         let c = p.constants().unwrap();
         let dx = p.particle_spacing;
-        let points: Vec<Vec2> = (0..10 * 10)
-            .map(|k| Vec2::new((k % 10) as f32 + 0.5, (k / 10) as f32 + 0.5) * dx)
+        let points: Vec<Vec2> = (0..nx * ny)
+            .map(|k| Vec2::new((k % nx) as f32 + 0.5, (k / nx) as f32 + 0.5) * dx)
             .collect();
         let mut fluid = FluidSnapshot::default();
         fluid.rebuild(&c, &points, &vec![Vec2::ZERO; points.len()], &Sequential);
@@ -563,7 +567,18 @@ mod tests {
         let accelerations: Vec<Vec2> = (0..fluid.len())
             .map(|slot| dfsph.non_pressure_acceleration(&c, &fluid, slot))
             .collect();
-        dfsph.solve_density(&c, 0.004, |slot| accelerations[slot], &Sequential)
+        let iterations = dfsph.solve_density(&c, 0.004, |slot| accelerations[slot], &Sequential);
+        (c, fluid, dfsph, iterations)
+    }
+
+    /// The density solve's iterations on a resting 10 × 10 block from zero pressure.
+    fn resting_layer_iterations(tolerance: f32, most: u32, fixed_budget: bool) -> u32 {
+        let (.., iterations) = solve_resting_block((10, 10), 0.1, |d| {
+            d.density_tolerance = tolerance;
+            d.max_density_iterations = most;
+            d.fixed_budget = fixed_budget;
+        });
+        iterations
     }
 
     #[test]
@@ -581,29 +596,13 @@ mod tests {
 
     #[test]
     fn one_solve_from_rest_gives_hydrostatic_pressure() {
-        use crate::sim::boundary::Tank;
         let (w, d) = (0.2f32, 0.2f32);
-        let mut p = params();
-        p.tank = Some(Tank::new(w, 0.3));
-        p.dfsph.density_tolerance = 1e-6;
-        p.dfsph.max_density_iterations = 2000;
-        let c = p.constants().unwrap();
-        let dx = p.particle_spacing;
+        let dx = params().particle_spacing;
         let (nx, ny) = ((w / dx) as usize, (d / dx) as usize);
-        let points: Vec<Vec2> = (0..nx * ny)
-            .map(|k| Vec2::new((k % nx) as f32 + 0.5, (k / nx) as f32 + 0.5) * dx)
-            .collect();
-        let mut fluid = FluidSnapshot::default();
-        fluid.rebuild(&c, &points, &vec![Vec2::ZERO; points.len()], &Sequential);
-        let mut walls = Walls::default();
-        walls.rebuild(&c, &[]);
-        let mut dfsph = Dfsph::default();
-        dfsph.prepare(&c, &fluid, &walls, |_| Vec2::ZERO, &Sequential);
-        let accelerations: Vec<Vec2> = (0..fluid.len())
-            .map(|slot| dfsph.non_pressure_acceleration(&c, &fluid, slot))
-            .collect();
-        let dt = 0.004;
-        let iterations = dfsph.solve_density(&c, dt, |slot| accelerations[slot], &Sequential);
+        let (c, fluid, dfsph, iterations) = solve_resting_block((nx, ny), w, |d| {
+            d.density_tolerance = 1e-6;
+            d.max_density_iterations = 2000;
+        });
         assert!(dfsph.report.density_error <= 1e-6, "{:?}", dfsph.report);
         // The free surface sits half a spacing above the top row.
         let surface = d - 0.5 * dx;
