@@ -1,0 +1,546 @@
+//! A pressure solved on a coarse grid under the particles: the smooth, fluid-wide part of the
+//! pressure that local SPH iterations remove slowest (a column's weight), at a cost that does
+//! not grow with the depth. Pure, no ECS; nothing in a sub-step uses it yet.
+//!
+//! Each solve ([`GridPressure::solve`]):
+//! 1. A rectangle of square cells of [`GridPressureSettings::cell_ratio`] particle spacings,
+//!    on a lattice fixed to the world's origin (the tank's inner corner), bounded to the
+//!    particles and padded by two cells (and to the tank and its walls).
+//! 2. Cells whose centre lies outside the tank or inside a solid are solid, with the solid's
+//!    velocity; the particles' volumes are spread bilinearly over the cell centres (a share that
+//!    falls on a solid cell stays in the particle's own cell, the wall's mirror image), and a
+//!    cell at least half full is fluid, the rest air.
+//! 3. The particles' (predicted) velocities are averaged bilinearly onto the cell faces (a MAC
+//!    grid); a face of a solid cell carries the solid's velocity.
+//! 4. The pressure `p` that makes the faces' velocity `u − (dt/ρ₀) ∇p` divergence-free in every
+//!    fluid cell: `−∇²p = −(ρ₀/dt) ∇·u` on the five-point stencil, zero pressure at the free
+//!    surface, which lies between a fluid cell and an air neighbour where the fill's level set
+//!    `φ = ½ − fill` crosses zero (the ghost-fluid method: Gibou et al. 2002, as in Enright,
+//!    Nguyen, Gibou & Fedkiw 2003), no flow through solids but their own. The equations are
+//!    solved by conjugate gradients preconditioned with a multigrid V-cycle (McAdams, Sifakis &
+//!    Teran 2010), warm-started from the last solve's pressure cell by cell.
+//! 5. [`GridPressure::pressure_at`] reads the pressure back at any point, bilinearly between
+//!    cell centres, from a field extended past the fluid: into solid cells hydrostatically
+//!    (`p + ρ₀ g·Δx` from the fluid neighbour, so a particle at the floor reads the floor's
+//!    pressure), into air cells by the ghost-fluid line through zero at the surface, clamped at
+//!    zero (pressure pushes, never pulls).
+//!
+//! The pressure sums run in f64 and the preconditioner in f32; every sum is taken in a fixed
+//! order, so the pressure is the same on any number of threads.
+
+mod laplacian;
+mod multigrid;
+mod pcg;
+
+pub use laplacian::CellKind;
+
+use super::boundary::Tank;
+use super::parallel::{Parallel, for_each_slot};
+use bevy::math::{IVec2, Vec2};
+use laplacian::Laplacian;
+use multigrid::Multigrid;
+use pcg::Pcg;
+
+/// A free-surface fraction `θ` (the way from a fluid cell's centre to its air neighbour's where
+/// the surface lies) is at least this: a surface right at a centre would make its equation
+/// stiff without changing the pressure it gives.
+const MIN_THETA: f32 = 0.1;
+
+/// A grid of more cells than this is not built ([`GridReport::cells`] reads zero): particles
+/// scattered that far apart have no pressure worth a grid.
+pub const MAX_CELLS: usize = 1 << 22;
+
+/// How the grid pressure is solved.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GridPressureSettings {
+    /// A cell's side in particle spacings.
+    pub cell_ratio: f32,
+    /// The solve stops when the largest residual is this fraction of the largest right-hand
+    /// side (the divergence of the faces' velocities).
+    pub tolerance: f32,
+    /// At most this many conjugate-gradient iterations (V-cycles) a solve.
+    pub max_iterations: u32,
+}
+
+impl Default for GridPressureSettings {
+    fn default() -> Self {
+        Self {
+            cell_ratio: 2.0,
+            tolerance: 1e-6,
+            max_iterations: 100,
+        }
+    }
+}
+
+/// What one solve reads of the fluid.
+#[derive(Debug, Clone, Copy)]
+pub struct GridInput<'a> {
+    /// Particle positions, m.
+    pub positions: &'a [Vec2],
+    /// Particle velocities the pressure is to make divergence-free (predicted under every
+    /// other force), m/s.
+    pub velocities: &'a [Vec2],
+    /// The particle spacing, m (a particle's volume is its square).
+    pub spacing: f32,
+    /// Rest density, kg/m³.
+    pub rest_density: f32,
+    /// The step the pressure acts over, s.
+    pub dt: f32,
+    /// Gravity, m/s² (the pressure's extension into solid cells).
+    pub gravity: Vec2,
+    /// The tank, if any: cells outside it are solid.
+    pub tank: Option<Tank>,
+}
+
+/// What the last solve did.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct GridReport {
+    /// Cells of the grid.
+    pub cells: usize,
+    /// Of those, fluid.
+    pub fluid_cells: usize,
+    /// Levels of the multigrid.
+    pub levels: usize,
+    /// Conjugate-gradient iterations (one V-cycle each).
+    pub iterations: u32,
+    /// The largest residual left, as a fraction of the largest right-hand side.
+    pub relative_residual: f32,
+}
+
+/// The pressure of the last solve and the last solve's last pressure, cell by cell, with the
+/// grid's own state (see the module docs).
+#[derive(Debug, Clone, Default)]
+pub struct GridPressure {
+    settings: GridPressureSettings,
+    /// A cell's side, m.
+    cell: f32,
+    /// The lattice index of the rectangle's first cell.
+    first: IVec2,
+    equations: Laplacian,
+    fill: Vec<f32>,
+    solid_velocity: Vec<Vec2>,
+    /// Velocities on the faces normal to x (`(nx + 1) ny`) and to y (`nx (ny + 1)`), m/s.
+    faces: [Vec<f32>; 2],
+    rhs: Vec<f64>,
+    /// Pressure per fluid cell, Pa (zero elsewhere).
+    pressure: Vec<f64>,
+    /// The pressure extended past the fluid for reading back, Pa.
+    extended: Vec<f32>,
+    /// The last solve's pressure, for the next one's start.
+    previous: (IVec2, usize, Vec<f64>),
+    multigrid: Multigrid,
+    pcg: Pcg,
+    /// `ρ₀ g`, Pa/m.
+    weight: Vec2,
+    report: GridReport,
+}
+
+impl GridPressure {
+    /// A grid pressure solved with `settings`.
+    pub fn new(settings: GridPressureSettings) -> Self {
+        Self {
+            settings,
+            ..Self::default()
+        }
+    }
+
+    /// What the last solve did.
+    pub fn report(&self) -> GridReport {
+        self.report
+    }
+
+    /// Solves the pressure that makes `input`'s velocities divergence-free (see the module
+    /// docs); `solid(x)` gives the velocity of the solid at `x`, if any, besides the tank.
+    pub fn solve(
+        &mut self,
+        input: &GridInput,
+        solid: impl Fn(Vec2) -> Option<Vec2> + Sync,
+        parallel: &impl Parallel,
+    ) -> GridReport {
+        self.report = GridReport::default();
+        self.cell = self.settings.cell_ratio * input.spacing;
+        self.weight = input.rest_density * input.gravity;
+        if !self.place(input) {
+            self.equations = Laplacian::default();
+            self.pressure.clear();
+            self.extended.clear();
+            return self.report;
+        }
+        self.classify(input.tank, &solid, parallel);
+        self.splat(input);
+        self.assemble(input);
+        self.warm_start();
+        self.multigrid.rebuild(&self.equations);
+        let result = self.pcg.solve(
+            (&self.equations, &mut self.multigrid),
+            &self.rhs,
+            &mut self.pressure,
+            (
+                f64::from(self.settings.tolerance),
+                self.settings.max_iterations,
+            ),
+            parallel,
+        );
+        self.extend(parallel);
+        self.previous = (self.first, self.equations.nx, self.pressure.clone());
+        self.report = GridReport {
+            cells: self.equations.len(),
+            fluid_cells: self.equations.fluid_cells(),
+            levels: self.multigrid.depth(),
+            iterations: result.iterations,
+            relative_residual: result.relative_residual as f32,
+        };
+        self.report
+    }
+
+    /// The pressure at `x`, Pa: bilinear between the cell centres of the last solve, extended
+    /// past the fluid (see the module docs), never negative; zero off the grid.
+    pub fn pressure_at(&self, x: Vec2) -> f32 {
+        if self.extended.is_empty() {
+            return 0.0;
+        }
+        let g = x / self.cell - self.first.as_vec2() - Vec2::splat(0.5);
+        let base = g.floor();
+        let f = g - base;
+        let (i, j) = (base.x as i64, base.y as i64);
+        let value = |di: i64, dj: i64| self.cell_value(i + di, j + dj);
+        let p = (1.0 - f.y) * ((1.0 - f.x) * value(0, 0) + f.x * value(1, 0))
+            + f.y * ((1.0 - f.x) * value(0, 1) + f.x * value(1, 1));
+        p.max(0.0)
+    }
+
+    /// The pressure of cell `(i, j)` of the rectangle, Pa: the solved one in the fluid, the
+    /// extended one elsewhere, zero outside.
+    fn cell_value(&self, i: i64, j: i64) -> f32 {
+        let (nx, ny) = (self.equations.nx as i64, self.equations.ny as i64);
+        if i < 0 || j < 0 || i >= nx || j >= ny {
+            return 0.0;
+        }
+        self.extended[(j * nx + i) as usize]
+    }
+
+    /// The kind of the cell holding `x` in the last solve (air off the grid).
+    pub fn kind_at(&self, x: Vec2) -> CellKind {
+        self.cell_index(x)
+            .map_or(CellKind::Air, |c| self.equations.kind[c])
+    }
+
+    /// The rectangle's index of the cell holding `x`, if it is on the grid.
+    fn cell_index(&self, x: Vec2) -> Option<usize> {
+        let g = (x / self.cell).floor() - self.first.as_vec2();
+        let (nx, ny) = (self.equations.nx as f32, self.equations.ny as f32);
+        (g.x >= 0.0 && g.y >= 0.0 && g.x < nx && g.y < ny)
+            .then(|| g.y as usize * self.equations.nx + g.x as usize)
+    }
+
+    /// Step 1: the rectangle of cells; `false` if there is none (no finite particle, or more
+    /// than [`MAX_CELLS`]).
+    fn place(&mut self, input: &GridInput) -> bool {
+        let (mut lo, mut hi) = (Vec2::splat(f32::MAX), Vec2::splat(f32::MIN));
+        for &x in input.positions.iter().filter(|x| x.is_finite()) {
+            (lo, hi) = (lo.min(x), hi.max(x));
+        }
+        if lo.x > hi.x || self.cell.is_nan() || self.cell <= 0.0 {
+            return false;
+        }
+        // In cells, clamped to the tank before any conversion to integers (a particle flung far
+        // away must not overflow them).
+        let (mut first, mut last) = (
+            (lo / self.cell).floor() - Vec2::splat(2.0),
+            (hi / self.cell).floor() + Vec2::splat(2.0),
+        );
+        if let Some(tank) = input.tank {
+            // The tank's walls are the cells just outside it.
+            let end = (tank.size() / self.cell).ceil();
+            first = first.clamp(Vec2::NEG_ONE, end);
+            last = last.clamp(Vec2::NEG_ONE, end);
+        }
+        let size = (last - first + Vec2::ONE).max(Vec2::ZERO);
+        let area = size.x * size.y;
+        if area.is_nan() || area > MAX_CELLS as f32 || area < 1.0 {
+            return false;
+        }
+        let (first, size) = (first.as_ivec2(), size.as_uvec2());
+        let cells = size.x as usize * size.y as usize;
+        self.first = first;
+        let e = &mut self.equations;
+        (e.nx, e.ny, e.off) = (size.x as usize, size.y as usize, self.cell.powi(-2));
+        for v in [&mut e.diag, &mut self.fill] {
+            v.clear();
+            v.resize(cells, 0.0);
+        }
+        e.kind.clear();
+        e.kind.resize(cells, CellKind::Air);
+        true
+    }
+
+    /// The centre of cell `c` of the rectangle, m.
+    fn center(&self, c: usize) -> Vec2 {
+        let nx = self.equations.nx;
+        let index = self.first + IVec2::new((c % nx) as i32, (c / nx) as i32);
+        (index.as_vec2() + Vec2::splat(0.5)) * self.cell
+    }
+
+    /// Step 2, the solids: cells outside the tank or inside a solid, with their velocities.
+    fn classify(
+        &mut self,
+        tank: Option<Tank>,
+        solid: &(impl Fn(Vec2) -> Option<Vec2> + Sync),
+        parallel: &impl Parallel,
+    ) {
+        let cells = self.equations.len();
+        self.solid_velocity.clear();
+        self.solid_velocity.resize(cells, Vec2::ZERO);
+        let mut solids = vec![None; cells];
+        let this = &*self;
+        for_each_slot(&mut solids, parallel, |c, out| {
+            let x = this.center(c);
+            *out = match tank {
+                Some(tank) if !tank.contains(x, 0.0) => Some(Vec2::ZERO),
+                _ => solid(x),
+            };
+            0.0
+        });
+        for (c, velocity) in solids.into_iter().enumerate() {
+            if let Some(velocity) = velocity {
+                self.equations.kind[c] = CellKind::Solid;
+                self.solid_velocity[c] = velocity;
+            }
+        }
+    }
+
+    /// Steps 2 and 3, the particles: each cell's fill (then fluid or air) and each face's
+    /// velocity.
+    fn splat(&mut self, input: &GridInput) {
+        let (nx, ny) = (self.equations.nx, self.equations.ny);
+        let share = input.spacing * input.spacing / (self.cell * self.cell);
+        let origin = self.first.as_vec2();
+        let mut sums = [
+            vec![(0.0f32, 0.0f32); (nx + 1) * ny],
+            vec![(0.0, 0.0); nx * (ny + 1)],
+        ];
+        for (&x, &v) in input.positions.iter().zip(input.velocities) {
+            if !(x.is_finite() && v.is_finite()) {
+                continue;
+            }
+            let g = x / self.cell - origin;
+            self.spread_volume(g, share);
+            for (axis, sums) in sums.iter_mut().enumerate() {
+                let (columns, rows) = (nx + usize::from(axis == 0), ny + usize::from(axis == 1));
+                let offset = if axis == 0 { Vec2::Y } else { Vec2::X } * 0.5;
+                bilinear(g - offset, (columns, rows), |f, w| {
+                    sums[f].0 += w * v[axis];
+                    sums[f].1 += w;
+                });
+            }
+        }
+        for c in 0..self.equations.len() {
+            if self.equations.kind[c] != CellKind::Solid && self.fill[c] >= 0.5 {
+                self.equations.kind[c] = CellKind::Fluid;
+            }
+        }
+        for (axis, sums) in sums.iter().enumerate() {
+            let faces = &mut self.faces[axis];
+            faces.clear();
+            faces.extend(sums.iter().map(
+                |&(sum, weight)| {
+                    if weight > 0.0 { sum / weight } else { 0.0 }
+                },
+            ));
+            self.close_solid_faces(axis);
+        }
+    }
+
+    /// Adds a particle's volume (`share` of a cell) at lattice point `g` to the cells about it;
+    /// what falls on a solid cell or off the grid stays in the particle's own cell.
+    fn spread_volume(&mut self, g: Vec2, share: f32) {
+        let e = &self.equations;
+        let (nx, ny) = (e.nx, e.ny);
+        let own = g.floor();
+        let own = (own.x >= 0.0 && own.y >= 0.0 && own.x < nx as f32 && own.y < ny as f32)
+            .then(|| own.y as usize * nx + own.x as usize)
+            .filter(|&c| e.kind[c] != CellKind::Solid);
+        let mut kept = 0.0;
+        let (fill, kind) = (&mut self.fill, &e.kind);
+        bilinear_all(g - Vec2::splat(0.5), (nx, ny), |c, w| match c {
+            Some(c) if kind[c] != CellKind::Solid => fill[c] += w * share,
+            _ => kept += w * share,
+        });
+        if let Some(own) = own {
+            fill[own] += kept;
+        }
+    }
+
+    /// Sets every face of a solid cell (and of the rectangle's edge) along `axis` to the
+    /// solid's velocity.
+    fn close_solid_faces(&mut self, axis: usize) {
+        let e = &self.equations;
+        let (nx, ny) = (e.nx, e.ny);
+        let columns = nx + usize::from(axis == 0);
+        for (f, face) in self.faces[axis].iter_mut().enumerate() {
+            let (i, j) = (f % columns, f / columns);
+            let (a, b) = face_cells((i, j), axis, (nx, ny));
+            let solid = [a, b]
+                .into_iter()
+                .find(|&c| c.is_none_or(|c| e.kind[c] == CellKind::Solid));
+            if let Some(c) = solid {
+                *face = c.map_or(0.0, |c| self.solid_velocity[c][axis]);
+            }
+        }
+    }
+
+    /// Step 4's equations: each fluid cell's diagonal (its free-surface fractions) and its
+    /// right-hand side `−(ρ₀/dt) ∇·u`.
+    fn assemble(&mut self, input: &GridInput) {
+        let e = &mut self.equations;
+        let cells = e.len();
+        self.rhs.clear();
+        self.rhs.resize(cells, 0.0);
+        let scale = -f64::from(input.rest_density / input.dt);
+        for c in 0..cells {
+            if e.kind[c] != CellKind::Fluid {
+                continue;
+            }
+            let mut diag = 0.0;
+            for n in e.neighbors(c) {
+                diag += match e.kind_of(n) {
+                    CellKind::Fluid => 1.0,
+                    CellKind::Air => {
+                        1.0 / theta(self.fill[c], self.fill[n.expect("air is inside")])
+                    }
+                    CellKind::Solid => 0.0,
+                };
+            }
+            e.diag[c] = diag * e.off;
+            self.rhs[c] = scale * f64::from(divergence(&self.faces, c, (e.nx, e.ny), self.cell));
+        }
+    }
+
+    /// Step 4's start: the last solve's pressure where the same lattice cell was fluid.
+    fn warm_start(&mut self) {
+        let e = &self.equations;
+        let (first, nx, previous) = (&self.previous.0, self.previous.1, &self.previous.2);
+        let rows = previous.len().checked_div(nx).unwrap_or(0);
+        self.pressure.clear();
+        self.pressure.extend((0..e.len()).map(|c| {
+            if !e.is_fluid(c) {
+                return 0.0;
+            }
+            let at = self.first + IVec2::new((c % e.nx) as i32, (c / e.nx) as i32) - *first;
+            let inside = at.x >= 0 && at.y >= 0 && (at.x as usize) < nx && (at.y as usize) < rows;
+            if inside {
+                previous[at.y as usize * nx + at.x as usize]
+            } else {
+                0.0
+            }
+        }));
+    }
+
+    /// Step 5: the pressure extended past the fluid, for reading back.
+    fn extend(&mut self, parallel: &impl Parallel) {
+        let cells = self.equations.len();
+        let mut extended = core::mem::take(&mut self.extended);
+        extended.clear();
+        extended.resize(cells, 0.0);
+        let this = &*self;
+        let e = &this.equations;
+        for_each_slot(&mut extended, parallel, |c, out| {
+            *out = match e.kind[c] {
+                CellKind::Fluid => this.pressure[c] as f32,
+                kind => {
+                    // A solid corner cell has no fluid face: it takes its diagonal neighbours'
+                    // (a particle in the tank's corner reads the floor's pressure, not zero).
+                    this.extend_from(c, kind, e.neighbors(c))
+                        .or_else(|| {
+                            (kind == CellKind::Solid)
+                                .then(|| this.extend_from(c, kind, e.diagonals(c)))
+                                .flatten()
+                        })
+                        .unwrap_or(0.0)
+                }
+            };
+            0.0
+        });
+        self.extended = extended;
+    }
+}
+
+impl GridPressure {
+    /// The extended pressure of a `kind` cell `c` (not fluid) from its fluid cells among
+    /// `neighbors`, averaged: hydrostatically into a solid, along the ghost-fluid line through
+    /// zero at the surface into air; `None` without a fluid one.
+    fn extend_from(&self, c: usize, kind: CellKind, neighbors: [Option<usize>; 4]) -> Option<f32> {
+        let e = &self.equations;
+        let (mut sum, mut count) = (0.0, 0);
+        for n in neighbors.into_iter().flatten().filter(|&n| e.is_fluid(n)) {
+            let p = self.pressure[n] as f32;
+            sum += if kind == CellKind::Solid {
+                p + self.weight.dot(self.center(c) - self.center(n))
+            } else {
+                p * (1.0 - 1.0 / theta(self.fill[n], self.fill[c]))
+            };
+            count += 1;
+        }
+        (count > 0).then(|| sum / count as f32)
+    }
+}
+
+/// Where the free surface lies between a fluid cell and an air one, as a fraction of the way
+/// from the fluid cell's centre (the zero of `½ − fill`, linearly between them).
+fn theta(fluid_fill: f32, air_fill: f32) -> f32 {
+    let (inside, outside) = (fluid_fill - 0.5, 0.5 - air_fill);
+    (inside / (inside + outside)).clamp(MIN_THETA, 1.0)
+}
+
+/// The two cells on either side of face `(i, j)` normal to `axis` (lower, upper), `None` off
+/// the rectangle.
+fn face_cells(
+    (i, j): (usize, usize),
+    axis: usize,
+    (nx, ny): (usize, usize),
+) -> (Option<usize>, Option<usize>) {
+    let upper = (i < nx && j < ny).then(|| j * nx + i);
+    let lower = if axis == 0 {
+        (i > 0 && j < ny).then(|| j * nx + i - 1)
+    } else {
+        (j > 0 && i < nx).then(|| (j - 1) * nx + i)
+    };
+    (lower, upper)
+}
+
+/// `∇·u` of cell `c` from its four faces, 1/s.
+fn divergence(faces: &[Vec<f32>; 2], c: usize, (nx, _ny): (usize, usize), cell: f32) -> f32 {
+    let (i, j) = (c % nx, c / nx);
+    let u = &faces[0][j * (nx + 1) + i..];
+    let (v_low, v_high) = (faces[1][j * nx + i], faces[1][(j + 1) * nx + i]);
+    (u[1] - u[0] + v_high - v_low) / cell
+}
+
+/// Calls `add(index, weight)` for the (up to four) points of a `columns` × `rows` lattice about
+/// `g` (lattice coordinates) that lie on it, with their bilinear weights.
+fn bilinear(g: Vec2, (columns, rows): (usize, usize), mut add: impl FnMut(usize, f32)) {
+    bilinear_all(g, (columns, rows), |c, w| {
+        if let Some(c) = c {
+            add(c, w)
+        }
+    });
+}
+
+/// [`bilinear`] over all four points, `None` for those off the lattice.
+fn bilinear_all(g: Vec2, (columns, rows): (usize, usize), mut add: impl FnMut(Option<usize>, f32)) {
+    let base = g.floor();
+    let f = g - base;
+    for (di, dj, w) in [
+        (0, 0, (1.0 - f.x) * (1.0 - f.y)),
+        (1, 0, f.x * (1.0 - f.y)),
+        (0, 1, (1.0 - f.x) * f.y),
+        (1, 1, f.x * f.y),
+    ] {
+        let (i, j) = (base.x + di as f32, base.y + dj as f32);
+        let on = i >= 0.0 && j >= 0.0 && i < columns as f32 && j < rows as f32;
+        add(on.then(|| j as usize * columns + i as usize), w);
+    }
+}
+
+#[cfg(test)]
+mod tests;
