@@ -45,13 +45,13 @@ struct FluidSums {
 
 /// The SPH average `Σⱼ Vⱼ Wᵢⱼ κⱼ / Σⱼ Vⱼ Wᵢⱼ` a row sums as it is written, from the particle's
 /// own share.
-struct Smoothing<'a> {
+struct Smoothing<K> {
     /// `Σ V W κ` so far, m²/s².
     sum: f32,
     /// `Σ V W` so far.
     weight: f32,
-    /// The stiffness `κⱼ` of each slot, m²/s².
-    kappa: &'a [f32],
+    /// The stiffness `κⱼ` of the particle at a slot, m²/s².
+    kappa: K,
 }
 
 /// What a particle's wall neighbours sum to (see [`SlotState`]).
@@ -66,46 +66,18 @@ struct WallSums {
 }
 
 impl Dfsph {
-    /// Sets each slot's velocity and starting stiffnesses `[κ, κᵛ]` from `start(slot)`, in
-    /// slot order, so that the neighbour pass reads its neighbours' from memory the cell sort
-    /// keeps together (one look-up through the driver's order per particle, not one per pair).
-    pub(super) fn set_starts(
-        &mut self,
-        start: &(impl Fn(usize) -> (Vec2, Vec2) + Sync),
-        parallel: &impl Parallel,
-    ) {
-        let n = self.state.len();
-        let mut jobs: Vec<_> = self
-            .velocity
-            .chunks_mut(CHUNK)
-            .zip(self.kappa.chunks_mut(CHUNK))
-            .zip(self.kappa_divergence.chunks_mut(CHUNK))
-            .enumerate()
-            .map(|(k, starts)| (k * CHUNK, starts))
-            .collect();
-        run_jobs(
-            parallel,
-            n,
-            &mut jobs,
-            |(first, ((velocity, kappa), kappa_divergence))| {
-                for (k, v) in velocity.iter_mut().enumerate() {
-                    let (velocity, stiffness) = start(*first + k);
-                    (*v, kappa[k], kappa_divergence[k]) = (velocity, stiffness.x, stiffness.y);
-                }
-            },
-        );
-    }
-
-    /// Fills rows of `stride` entries from the starts [`set_starts`](Self::set_starts) wrote
-    /// (with `smooth`, the particle's own kernel weight `V W(0)`, each κ replaced by its SPH
-    /// average over the row: see [`Dfsph::prepare`]), and returns the most neighbours any
-    /// particle has (more than `stride`: the rows were short).
+    /// Fills rows of `stride` entries, and each slot's velocity and stiffnesses `[κ, κᵛ]` from
+    /// `start(slot)` (with `smooth`, the particle's own kernel weight `V W(0)`, κ replaced by
+    /// its SPH average over the row: see [`Dfsph::prepare`]), and returns the most neighbours
+    /// any particle has (more than `stride`: the rows were short).
+    #[expect(clippy::too_many_arguments, reason = "one pass, spelled out")]
     pub(super) fn gather_neighbors<W: RadialKernel, G: RadialKernel>(
         &mut self,
-        (w, g): (&W, &G),
+        w: &W,
+        g: &G,
         c: &SphConstants,
         (fluid, walls): (&FluidSnapshot, &Walls),
-        smooth: Option<f32>,
+        (start, smooth): (&(impl Fn(usize) -> (Vec2, Vec2) + Sync), Option<f32>),
         stride: usize,
         parallel: &impl Parallel,
     ) -> usize {
@@ -120,30 +92,33 @@ impl Dfsph {
             gravity: c.gravity,
         };
         let deficient_below = DEFICIENT_NEIGHBORHOOD * lattice_neighbors(c) as f32;
-        // The smoothed stiffnesses go to the scratch array, which then trades places with the
-        // starts (the solve sets every entry of its search direction before reading one).
-        let kappa = &self.kappa;
-        self.scratch.delta.resize(n, 0.0);
+        let starts = self
+            .velocity
+            .chunks_mut(CHUNK)
+            .zip(self.kappa.chunks_mut(CHUNK))
+            .zip(self.kappa_divergence.chunks_mut(CHUNK));
         let mut jobs: Vec<_> = self
             .state
             .chunks_mut(CHUNK)
             .zip(self.rows.chunks_mut(CHUNK))
-            .zip(self.scratch.delta.chunks_mut(CHUNK))
+            .zip(starts)
             .enumerate()
-            .map(|(k, ((state, rows), smoothed))| (k * CHUNK, state, rows, smoothed, 0usize))
+            .map(|(k, ((state, rows), starts))| (k * CHUNK, state, rows, starts, 0usize))
             .collect();
         run_jobs(
             parallel,
             n,
             &mut jobs,
-            |(first, states, rows, smoothed, most)| {
+            |(first, states, rows, ((velocity, kappa), kappa_divergence), most)| {
                 for (k, state) in states.iter_mut().enumerate() {
                     let slot = *first + k;
+                    let (v, stiffness) = start(slot);
+                    (velocity[k], kappa[k], kappa_divergence[k]) = (v, stiffness.x, stiffness.y);
                     let x = fluid.points.get(slot);
                     let smoothing = smooth.map(|own| Smoothing {
-                        sum: own * kappa[slot],
+                        sum: own * stiffness.x,
                         weight: own,
-                        kappa,
+                        kappa: |j| start(j).1.x,
                     });
                     let mut sums = fluid_row(w, g, &terms, fluid, x, (rows, k, stride), smoothing);
                     let wall = wall_sums(w, g, &terms, walls, x, &mut sums.density);
@@ -154,7 +129,9 @@ impl Dfsph {
                     if len <= stride {
                         rows.pad(k, len, slot);
                     }
-                    smoothed[k] = sums.smoothed.unwrap_or(kappa[slot]);
+                    if let Some(smoothed) = sums.smoothed {
+                        kappa[k] = smoothed;
+                    }
                     // A particle's own stiffness changes its density rate through its own velocity
                     // (pushed by its neighbours and the mirrored wall) and its neighbours'.
                     let diagonal = (sums.gradient + WALL_MIRROR * wall.gradient).length_squared()
@@ -177,34 +154,26 @@ impl Dfsph {
                 }
             },
         );
-        let most = jobs.iter().map(|job| job.4).max().unwrap_or(0);
-        if most <= stride {
-            core::mem::swap(&mut self.kappa, &mut self.scratch.delta);
-        }
-        most
+        jobs.iter().map(|job| job.4).max().unwrap_or(0)
     }
 }
 
 /// The fluid neighbours of the particle at `x`: writes the `k`-th row of `rows` (up to its
 /// `stride` entries, with `smoothing` summed over them) and returns the sums over all of them.
 #[inline(always)]
-fn fluid_row<W: RadialKernel, G: RadialKernel>(
+fn fluid_row<W: RadialKernel, G: RadialKernel, K: Fn(usize) -> f32>(
     w: &W,
     g: &G,
     t: &Terms,
     fluid: &FluidSnapshot,
     x: Vec2,
     (rows, k, stride): (&mut RowsMut<'_>, usize, usize),
-    mut smoothing: Option<Smoothing<'_>>,
+    mut smoothing: Option<Smoothing<K>>,
 ) -> FluidSums {
     let mut len = 0usize;
     let mut density = Vec4::ZERO;
     let (mut sum_x, mut sum_y, mut sum_sq) = (Vec4::ZERO, Vec4::ZERO, Vec4::ZERO);
     fluid.points.for_each_batch(x, |first, dx, dy, r2| {
-        // A batch wholly outside the support adds nothing (its kernel values are zero).
-        if r2.cmplt(t.support_sq).bitmask() == 0 {
-            return;
-        }
         // One square root for the value and the slope (inside the support `√r² ≤ H` exactly,
         // so the slope's clamp changes only lanes the mask drops).
         let r = r2.sqrt();
@@ -230,7 +199,7 @@ fn fluid_row<W: RadialKernel, G: RadialKernel>(
             if len < stride {
                 rows.set(k, len, first + lane, Vec2::new(gx[lane], gy[lane]));
                 if let Some(s) = &mut smoothing {
-                    s.sum += values[lane] * s.kappa[first + lane];
+                    s.sum += values[lane] * (s.kappa)(first + lane);
                     s.weight += values[lane];
                 }
             }
@@ -258,9 +227,6 @@ fn wall_sums<W: RadialKernel, G: RadialKernel>(
 ) -> WallSums {
     let mut sums = WallSums::default();
     walls.points.for_each_batch(x, |start, dx, dy, r2| {
-        if r2.cmplt(t.support_sq).bitmask() == 0 {
-            return;
-        }
         let r = r2.sqrt();
         *density += w.value_x4(r, r2);
         let inside = r2.cmplt(t.support_sq) & r2.cmpgt(t.tiny);

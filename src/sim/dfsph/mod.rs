@@ -201,18 +201,18 @@ impl Dfsph {
         parallel: &impl Parallel,
     ) {
         let n = fluid.len();
-        // The starts and the neighbour pass write every slot's state, velocity and stiffness.
+        // The neighbour pass writes every slot's state, velocity and stiffness.
         self.state.resize(n, SlotState::default());
         self.velocity.resize(n, Vec2::ZERO);
         self.kappa.resize(n, 0.0);
         self.kappa_divergence.resize(n, 0.0);
+        self.scratch.delta.resize(n, 0.0);
         let warm = c.dfsph.warm_start;
         let start = |slot: usize| {
             let [_, _, vx, vy] = fluid.kinematics[slot];
             let k = if warm { warm_start(slot) } else { Vec2::ZERO };
             (Vec2::new(vx, vy), k.max(Vec2::ZERO))
         };
-        self.set_starts(&start, parallel);
         // Rows a little longer than a rest neighbourhood: the iterations stream them, so they are
         // kept short. A compressed particle with more neighbours makes them long enough for the
         // most seen, and the pass runs again.
@@ -227,7 +227,15 @@ impl Dfsph {
                 // The density solve's warm start, smoothed (see above) with the particle's own
                 // weight.
                 let smooth = warm.then(|| c.volume * w.value_sq_x4(Vec4::ZERO).x);
-                self.gather_neighbors((&w, &g), c, (fluid, walls), smooth, stride, parallel)
+                self.gather_neighbors(
+                    &w,
+                    &g,
+                    c,
+                    (fluid, walls),
+                    (&start, smooth),
+                    stride,
+                    parallel,
+                )
             });
             if most <= stride {
                 break;
