@@ -101,6 +101,9 @@ struct Cli {
     /// --density-iterations).
     #[arg(long, requires = "density_iterations", value_parser = clap::value_parser!(u32).range(0..=10_000))]
     divergence_iterations: Option<u32>,
+    /// DFSPH: start the density solve from a pressure on a coarse grid.
+    #[arg(long)]
+    grid_start: bool,
     /// With --realtime: where a sub-step's time goes, a line per part before the last line.
     #[arg(long, requires = "realtime")]
     breakdown: bool,
@@ -113,10 +116,9 @@ impl Cli {
         if let (Some(density), Some(divergence)) =
             (self.density_iterations, self.divergence_iterations)
         {
-            params.dfsph.max_density_iterations = density;
-            params.dfsph.max_divergence_iterations = divergence;
-            params.dfsph.fixed_budget = true;
+            params.dfsph = params.dfsph.with_budget(density, divergence);
         }
+        params.dfsph.grid_start |= self.grid_start;
         params
     }
 }

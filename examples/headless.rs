@@ -124,6 +124,17 @@ struct Cli {
     /// Float: the bodies' CSV, `time,id,x,y,angle,vx,vy,omega,fx,fy,torque`.
     #[arg(long, default_value = "bodies.csv")]
     bodies_out: String,
+    /// DFSPH: exactly this many density-solve iterations per sub-step (a fixed budget, no
+    /// tolerance stop; with --divergence-iterations).
+    #[arg(long, requires = "divergence_iterations", value_parser = clap::value_parser!(u32).range(1..=10_000))]
+    density_iterations: Option<u32>,
+    /// DFSPH: exactly this many divergence-solve iterations per sub-step (0: none; with
+    /// --density-iterations).
+    #[arg(long, requires = "density_iterations", value_parser = clap::value_parser!(u32).range(0..=10_000))]
+    divergence_iterations: Option<u32>,
+    /// DFSPH: start the density solve from a pressure on a coarse grid.
+    #[arg(long)]
+    grid_start: bool,
 }
 
 /// The floating body's shape.
@@ -273,6 +284,11 @@ fn configure(cli: &Cli) -> Result<Config, String> {
         max_substeps: 100_000,
         ..default()
     };
+    let mut params = params;
+    if let (Some(density), Some(divergence)) = (cli.density_iterations, cli.divergence_iterations) {
+        params.dfsph = params.dfsph.with_budget(density, divergence);
+    }
+    params.dfsph.grid_start = cli.grid_start;
     params.validate().map_err(|e| e.to_string())?;
     if !(0.0..=0.45).contains(&cli.jitter) {
         return Err(format!(

@@ -50,6 +50,17 @@ struct Args {
     /// DFSPH: start each solve from zero pressure instead of the last sub-step's.
     #[arg(long)]
     cold_start: bool,
+    /// DFSPH: exactly this many density-solve iterations per sub-step (a fixed budget, no
+    /// tolerance stop; with --divergence-iterations).
+    #[arg(long, requires = "divergence_iterations", value_parser = clap::value_parser!(u32).range(1..=10_000))]
+    density_iterations: Option<u32>,
+    /// DFSPH: exactly this many divergence-solve iterations per sub-step (0: none; with
+    /// --density-iterations).
+    #[arg(long, requires = "density_iterations", value_parser = clap::value_parser!(u32).range(0..=10_000))]
+    divergence_iterations: Option<u32>,
+    /// DFSPH: start the density solve from a pressure on a coarse grid.
+    #[arg(long)]
+    grid_start: bool,
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -96,6 +107,11 @@ fn main() {
         (d.max_density_iterations, d.max_divergence_iterations) = (most, most);
     }
     d.warm_start &= !args.cold_start;
+    if let (Some(density), Some(divergence)) = (args.density_iterations, args.divergence_iterations)
+    {
+        *d = d.with_budget(density, divergence);
+    }
+    d.grid_start |= args.grid_start;
     let tick = 1.0 / args.hz;
     if let Some(particles) = args.dam_break {
         let started = std::time::Instant::now();

@@ -505,6 +505,7 @@ fn dfsph_settings(ui: &mut egui::Ui, p: &mut SphParams) {
         &mut p.dfsph.fixed_budget,
         "fixed budget (no tolerance stop)",
     );
+    ui.checkbox(&mut p.dfsph.grid_start, "start from a coarse-grid pressure");
 }
 
 fn gravity_section(ui: &mut egui::Ui, data: &mut PanelData) {

@@ -23,13 +23,6 @@ pub mod density;
 pub mod dfsph;
 pub mod gravity;
 pub mod grid;
-#[cfg_attr(
-    not(test),
-    expect(
-        dead_code,
-        reason = "no sub-step uses the grid pressure yet (the next step of its issue); its tests run it"
-    )
-)]
 pub mod grid_pressure;
 pub mod integrate;
 pub mod kernels;

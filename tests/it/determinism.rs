@@ -226,3 +226,14 @@ fn dfsph_slices_are_deterministic_across_thread_counts() {
     assert!(positions.len() > bevy_sph2d::fluid::parallel::PARALLEL_SLOTS);
     check_slices_across_thread_counts(&p, &positions, 5);
 }
+
+#[test]
+fn grid_start_slices_are_deterministic_across_thread_counts() {
+    // The grid's passes run in parallel chunks too at this spacing.
+    let p = SphParams {
+        dfsph: bevy_sph2d::fluid::DfsphSettings::grid_budget(),
+        ..dfsph_fine()
+    };
+    let positions = block(1).positions_for(&p);
+    check_slices_across_thread_counts(&p, &positions, 5);
+}

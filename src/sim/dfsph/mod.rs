@@ -16,7 +16,9 @@
 //!    viscosity, the walls' hydrostatic head) and its own external forces, picks the step
 //!    ([`Dfsph::stable_time_step`]: the flow's CFL `C Δx / v_max`, with the speed the largest
 //!    pressure can give ([`pressure_speed`]) counted in `v_max`, the force and viscous limits).
-//! 4. [`Dfsph::solve_density`]: predicts `v* = v + dt a` with every acceleration, then the
+//! 4. [`Dfsph::predict`]: `v* = v + dt a` with every acceleration; with
+//!    [`grid_start`](super::config::DfsphSettings::grid_start), [`Dfsph::start_from_grid`]: the
+//!    starting stiffness from a pressure on a coarse grid; then [`Dfsph::solve_density`]: the
 //!    stiffness `κ` that brings the predicted density `ρ̂ᵢ + dt Dρ̂ᵢ/Dt` back to one wherever it
 //!    is compressed.
 //! 5. The caller moves each particle with its solved velocity ([`Dfsph::velocity`]).
@@ -70,6 +72,7 @@ use rows::{BLOCK, Rows};
 use solve::Target;
 
 mod gather;
+mod grid_start;
 #[expect(
     unsafe_code,
     reason = "the AVX2 sums, each unsafe block with its SAFETY note"
@@ -147,6 +150,9 @@ pub struct DfsphReport {
     pub density_error: f32,
     /// Mean density change per step left after the divergence solve, fraction.
     pub divergence_error: f32,
+    /// Conjugate-gradient iterations of the grid pressure that started the density solve
+    /// (zero without [`grid_start`](super::config::DfsphSettings::grid_start)).
+    pub grid_iterations: u32,
 }
 
 /// The divergence-free solver's state for one sub-step, by sorted slot (see the module docs).
@@ -166,6 +172,8 @@ pub struct Dfsph {
     expansion_step: f32,
     /// The kernel and support ratio `expansion_step` was computed for.
     expansion_key: Option<(super::kernels::KernelKind, u32)>,
+    /// The density solve's start on a coarse grid, when the settings ask for it.
+    grid_start: grid_start::GridStart,
     /// What the last sub-step did.
     pub report: DfsphReport,
 }
@@ -267,30 +275,37 @@ impl Dfsph {
         iterations
     }
 
-    /// Step 4: predicts velocities with each particle's acceleration `acceleration(slot)` (m/s²,
-    /// by sorted slot: gravity, viscosity and external forces) and solves for the pressure that
-    /// keeps the density at rest after a step of `dt` seconds. Returns the iterations.
-    pub fn solve_density(
-        &mut self,
-        c: &SphConstants,
-        dt: f32,
-        acceleration: impl Fn(usize) -> Vec2 + Sync,
-        parallel: &impl Parallel,
-    ) -> u32 {
-        if self.is_empty() || dt <= 0.0 {
-            return 0;
-        }
-        let settings = c.dfsph;
+    /// Step 4, first: predicts velocities with each particle's acceleration `acceleration(slot)`
+    /// (m/s², by sorted slot: gravity, viscosity and external forces) over a step of `dt`
+    /// seconds. Returns the largest acceleration, m/s².
+    pub fn predict(&mut self, dt: f32, acceleration: impl Fn(usize) -> Vec2) -> f32 {
         let mut most = 0.0f32;
         for (slot, v) in self.velocity.iter_mut().enumerate() {
             let a = acceleration(slot);
             most = most.max(a.length_squared());
             *v += dt * a;
         }
+        most.sqrt()
+    }
+
+    /// Step 4, then: solves for the pressure that keeps the density of the predicted velocities
+    /// at rest after a step of `dt` seconds, under accelerations of at most `max_acceleration`
+    /// (m/s², what [`predict`](Self::predict) returned). Returns the iterations.
+    pub fn solve_density(
+        &mut self,
+        c: &SphConstants,
+        dt: f32,
+        max_acceleration: f32,
+        parallel: &impl Parallel,
+    ) -> u32 {
+        if self.is_empty() || dt <= 0.0 {
+            return 0;
+        }
+        let settings = c.dfsph;
         // A pressure error that pushes a whole column by `δa` shows as a density error of only
         // `δa dt²/Δx` at its floor: the largest error allowed keeps it under a fraction of the
         // accelerations the pressure balances, at any depth.
-        let largest = PRESSURE_ACCURACY * most.sqrt() * dt * dt / c.spacing;
+        let largest = PRESSURE_ACCURACY * max_acceleration * dt * dt / c.spacing;
         let (iterations, error) = self.solve(dt, Target::Density, largest, &settings, parallel);
         self.report.density_iterations = iterations;
         self.report.density_error = error;
@@ -567,7 +582,8 @@ mod tests {
         let accelerations: Vec<Vec2> = (0..fluid.len())
             .map(|slot| dfsph.non_pressure_acceleration(&c, &fluid, slot))
             .collect();
-        let iterations = dfsph.solve_density(&c, 0.004, |slot| accelerations[slot], &Sequential);
+        let most = dfsph.predict(0.004, |slot| accelerations[slot]);
+        let iterations = dfsph.solve_density(&c, 0.004, most, &Sequential);
         (c, fluid, dfsph, iterations)
     }
 

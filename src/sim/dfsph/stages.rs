@@ -64,7 +64,7 @@ impl PressureStages for Dfsph {
     }
 
     /// Step 4: the density solve under every particle's acceleration (external forces
-    /// included).
+    /// included), started from the grid pressure if the settings ask for it.
     fn solve_pressure(
         &mut self,
         s: &mut Shared,
@@ -74,8 +74,12 @@ impl PressureStages for Dfsph {
     ) {
         let c = s.constants;
         let (order, acceleration) = (s.snapshot.grid().order(), &particles.acceleration);
-        let fetch = |slot: usize| acceleration[order[slot] as usize];
-        let iterations = self.solve_density(&c, dt, fetch, parallel);
+        let most = self.predict(dt, |slot| acceleration[order[slot] as usize]);
+        if c.dfsph.grid_start && !self.is_empty() && dt > 0.0 {
+            let grid = self.start_from_grid(&c, (&s.snapshot, &s.walls), dt, parallel);
+            self.report.grid_iterations = grid.iterations;
+        }
+        let iterations = self.solve_density(&c, dt, most, parallel);
         s.iterations.density += iterations;
         s.iterations.total += iterations as u64;
         s.iterations.total_density += iterations as u64;

@@ -29,6 +29,8 @@ pub(crate) struct Laplacian {
     pub diag: Vec<f32>,
     /// `1/h²`, 1/m²: the coupling to a fluid neighbour (negated).
     pub off: f32,
+    /// Whether each cell is fluid on the rectangle's edge ([`Laplacian::mark_edges`]).
+    pub edge: Vec<bool>,
 }
 
 impl Laplacian {
@@ -74,37 +76,48 @@ impl Laplacian {
         self.kind[c] == CellKind::Fluid
     }
 
-    /// `Σ x_n` over the fluid neighbours of `c`.
+    /// `Σ x_n` over the neighbours of fluid cell `c`, for an `x` that is zero off the fluid (so
+    /// air and solid neighbours add nothing): the four at once inside the rectangle, those on it
+    /// along its edge.
     #[inline]
-    pub fn neighbor_sum<T: Copy + core::ops::Add<Output = T>>(
-        &self,
-        c: usize,
-        x: &[T],
-        zero: T,
-    ) -> T {
-        self.neighbors(c)
-            .into_iter()
-            .flatten()
-            .filter(|&n| self.kind[n] == CellKind::Fluid)
-            .fold(zero, |sum, n| sum + x[n])
+    fn neighbor_sum<T: Copy + Default + core::ops::Add<Output = T>>(&self, c: usize, x: &[T]) -> T {
+        if self.edge[c] {
+            return self
+                .neighbors(c)
+                .into_iter()
+                .flatten()
+                .fold(T::default(), |sum, n| sum + x[n]);
+        }
+        (x[c - 1] + x[c + 1]) + (x[c - self.nx] + x[c + self.nx])
     }
 
-    /// `(A x)_c` in f64 (zero off the fluid).
+    /// `(A x)_c` in f64 (zero off the fluid), for an `x` that is zero off the fluid.
     #[inline]
     pub fn apply_f64(&self, c: usize, x: &[f64]) -> f64 {
         if !self.is_fluid(c) {
             return 0.0;
         }
-        f64::from(self.diag[c]) * x[c] - f64::from(self.off) * self.neighbor_sum(c, x, 0.0)
+        f64::from(self.diag[c]) * x[c] - f64::from(self.off) * self.neighbor_sum(c, x)
     }
 
-    /// `(A x)_c` in f32 (zero off the fluid).
+    /// `(A x)_c` in f32 (zero off the fluid), for an `x` that is zero off the fluid.
     #[inline]
     pub fn apply_f32(&self, c: usize, x: &[f32]) -> f32 {
         if !self.is_fluid(c) {
             return 0.0;
         }
-        self.diag[c] * x[c] - self.off * self.neighbor_sum(c, x, 0.0)
+        self.diag[c] * x[c] - self.off * self.neighbor_sum(c, x)
+    }
+
+    /// Marks the fluid cells on the rectangle's edge, whose neighbours are looked up one by one
+    /// (call it once the kinds are set).
+    pub fn mark_edges(&mut self) {
+        let (nx, ny) = (self.nx, self.ny);
+        self.edge.clear();
+        self.edge.extend((0..self.len()).map(|c| {
+            let (i, j) = (c % nx, c / nx);
+            self.kind[c] == CellKind::Fluid && (i == 0 || j == 0 || i + 1 == nx || j + 1 == ny)
+        }));
     }
 
     /// The equations of the same cells with every air neighbour at a whole cell (`θ = 1`):
@@ -157,7 +170,9 @@ impl Laplacian {
             kind,
             diag: vec![0.0; nx * ny],
             off: self.off / 4.0,
+            edge: Vec::new(),
         };
+        coarse.mark_edges();
         coarse.set_plain_diagonal();
         coarse
     }

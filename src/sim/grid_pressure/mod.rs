@@ -1,6 +1,7 @@
 //! A pressure solved on a coarse grid under the particles: the smooth, fluid-wide part of the
 //! pressure that local SPH iterations remove slowest (a column's weight), at a cost that does
-//! not grow with the depth. Pure, no ECS; nothing in a sub-step uses it yet.
+//! not grow with the depth. Pure, no ECS; the DFSPH density solve starts from it
+//! ([`DfsphSettings::grid_start`](super::config::DfsphSettings::grid_start)).
 //!
 //! Each solve ([`GridPressure::solve`]):
 //! 1. A rectangle of square cells of [`GridPressureSettings::cell_ratio`] particle spacings,
@@ -121,6 +122,8 @@ pub struct GridPressure {
     solid_velocity: Vec<Vec2>,
     /// Velocities on the faces normal to x (`(nx + 1) ny`) and to y (`nx (ny + 1)`), m/s.
     faces: [Vec<f32>; 2],
+    /// Scratch of the faces: each one's weighted velocity sum and weight.
+    face_sums: [Vec<[f32; 2]>; 2],
     rhs: Vec<f64>,
     /// Pressure per fluid cell, Pa (zero elsewhere).
     pressure: Vec<f64>,
@@ -145,6 +148,7 @@ impl GridPressure {
     }
 
     /// What the last solve did.
+    #[cfg(test)]
     pub fn report(&self) -> GridReport {
         self.report
     }
@@ -182,7 +186,9 @@ impl GridPressure {
             parallel,
         );
         self.extend(parallel);
-        self.previous = (self.first, self.equations.nx, self.pressure.clone());
+        self.previous.0 = self.first;
+        self.previous.1 = self.equations.nx;
+        self.previous.2.clone_from(&self.pressure);
         self.report = GridReport {
             cells: self.equations.len(),
             fluid_cells: self.equations.fluid_cells(),
@@ -220,12 +226,14 @@ impl GridPressure {
     }
 
     /// The kind of the cell holding `x` in the last solve (air off the grid).
+    #[cfg(test)]
     pub fn kind_at(&self, x: Vec2) -> CellKind {
         self.cell_index(x)
             .map_or(CellKind::Air, |c| self.equations.kind[c])
     }
 
     /// The rectangle's index of the cell holding `x`, if it is on the grid.
+    #[cfg(test)]
     fn cell_index(&self, x: Vec2) -> Option<usize> {
         let g = (x / self.cell).floor() - self.first.as_vec2();
         let (nx, ny) = (self.equations.nx as f32, self.equations.ny as f32);
@@ -315,22 +323,24 @@ impl GridPressure {
         let (nx, ny) = (self.equations.nx, self.equations.ny);
         let share = input.spacing * input.spacing / (self.cell * self.cell);
         let origin = self.first.as_vec2();
-        let mut sums = [
-            vec![(0.0f32, 0.0f32); (nx + 1) * ny],
-            vec![(0.0, 0.0); nx * (ny + 1)],
-        ];
+        let lattices = [(nx + 1, ny), (nx, ny + 1)];
+        for (sums, (columns, rows)) in self.face_sums.iter_mut().zip(lattices) {
+            sums.clear();
+            sums.resize(columns * rows, [0.0; 2]);
+        }
         for (&x, &v) in input.positions.iter().zip(input.velocities) {
             if !(x.is_finite() && v.is_finite()) {
                 continue;
             }
             let g = x / self.cell - origin;
             self.spread_volume(g, share);
-            for (axis, sums) in sums.iter_mut().enumerate() {
-                let (columns, rows) = (nx + usize::from(axis == 0), ny + usize::from(axis == 1));
+            for (axis, sums) in self.face_sums.iter_mut().enumerate() {
+                // Faces normal to x lie half a cell up from the lattice points, those normal to
+                // y half a cell right.
                 let offset = if axis == 0 { Vec2::Y } else { Vec2::X } * 0.5;
-                bilinear(g - offset, (columns, rows), |f, w| {
-                    sums[f].0 += w * v[axis];
-                    sums[f].1 += w;
+                bilinear(g - offset, lattices[axis], |f, w| {
+                    sums[f][0] += w * v[axis];
+                    sums[f][1] += w;
                 });
             }
         }
@@ -339,14 +349,13 @@ impl GridPressure {
                 self.equations.kind[c] = CellKind::Fluid;
             }
         }
-        for (axis, sums) in sums.iter().enumerate() {
+        self.equations.mark_edges();
+        for axis in 0..2 {
             let faces = &mut self.faces[axis];
             faces.clear();
-            faces.extend(sums.iter().map(
-                |&(sum, weight)| {
-                    if weight > 0.0 { sum / weight } else { 0.0 }
-                },
-            ));
+            faces.extend(self.face_sums[axis].iter().map(|&[sum, weight]| {
+                if weight > 0.0 { sum / weight } else { 0.0 }
+            }));
             self.close_solid_faces(axis);
         }
     }
@@ -356,12 +365,32 @@ impl GridPressure {
     fn spread_volume(&mut self, g: Vec2, share: f32) {
         let e = &self.equations;
         let (nx, ny) = (e.nx, e.ny);
+        let (fill, kind) = (&mut self.fill, &e.kind);
+        if let Some((c, weights)) = stencil(g - Vec2::splat(0.5), (nx, ny)) {
+            // All four cells on the grid: the particle's own is one of them.
+            let cells = [c, c + 1, c + nx, c + nx + 1];
+            let mut kept = 0.0;
+            for (&c, w) in cells.iter().zip(weights) {
+                if kind[c] == CellKind::Solid {
+                    kept += w * share;
+                } else {
+                    fill[c] += w * share;
+                }
+            }
+            if kept > 0.0 {
+                let own = g.floor();
+                let own = own.y as usize * nx + own.x as usize;
+                if kind[own] != CellKind::Solid {
+                    fill[own] += kept;
+                }
+            }
+            return;
+        }
         let own = g.floor();
         let own = (own.x >= 0.0 && own.y >= 0.0 && own.x < nx as f32 && own.y < ny as f32)
             .then(|| own.y as usize * nx + own.x as usize)
-            .filter(|&c| e.kind[c] != CellKind::Solid);
+            .filter(|&c| kind[c] != CellKind::Solid);
         let mut kept = 0.0;
-        let (fill, kind) = (&mut self.fill, &e.kind);
         bilinear_all(g - Vec2::splat(0.5), (nx, ny), |c, w| match c {
             Some(c) if kind[c] != CellKind::Solid => fill[c] += w * share,
             _ => kept += w * share,
@@ -377,14 +406,15 @@ impl GridPressure {
         let e = &self.equations;
         let (nx, ny) = (e.nx, e.ny);
         let columns = nx + usize::from(axis == 0);
-        for (f, face) in self.faces[axis].iter_mut().enumerate() {
-            let (i, j) = (f % columns, f / columns);
-            let (a, b) = face_cells((i, j), axis, (nx, ny));
-            let solid = [a, b]
-                .into_iter()
-                .find(|&c| c.is_none_or(|c| e.kind[c] == CellKind::Solid));
-            if let Some(c) = solid {
-                *face = c.map_or(0.0, |c| self.solid_velocity[c][axis]);
+        for (j, row) in self.faces[axis].chunks_exact_mut(columns).enumerate() {
+            for (i, face) in row.iter_mut().enumerate() {
+                let (a, b) = face_cells((i, j), axis, (nx, ny));
+                let solid = [a, b]
+                    .into_iter()
+                    .find(|&c| c.is_none_or(|c| e.kind[c] == CellKind::Solid));
+                if let Some(c) = solid {
+                    *face = c.map_or(0.0, |c| self.solid_velocity[c][axis]);
+                }
             }
         }
     }
@@ -519,11 +549,46 @@ fn divergence(faces: &[Vec<f32>; 2], c: usize, (nx, _ny): (usize, usize), cell: 
 /// Calls `add(index, weight)` for the (up to four) points of a `columns` × `rows` lattice about
 /// `g` (lattice coordinates) that lie on it, with their bilinear weights.
 fn bilinear(g: Vec2, (columns, rows): (usize, usize), mut add: impl FnMut(usize, f32)) {
+    if let Some((c, weights)) = stencil(g, (columns, rows)) {
+        for (c, w) in [c, c + 1, c + columns, c + columns + 1]
+            .into_iter()
+            .zip(weights)
+        {
+            add(c, w);
+        }
+        return;
+    }
     bilinear_all(g, (columns, rows), |c, w| {
         if let Some(c) = c {
             add(c, w)
         }
     });
+}
+
+/// The first of the four points of a `columns` × `rows` lattice about `g` (lattice
+/// coordinates) and their bilinear weights (that point, right, up, up-right), if all four lie
+/// on it.
+#[inline]
+fn stencil(g: Vec2, (columns, rows): (usize, usize)) -> Option<(usize, [f32; 4])> {
+    let base = g.floor();
+    let on = base.x >= 0.0
+        && base.y >= 0.0
+        && base.x + 1.0 < columns as f32
+        && base.y + 1.0 < rows as f32;
+    if !on {
+        return None;
+    }
+    let f = g - base;
+    let c = base.y as usize * columns + base.x as usize;
+    Some((
+        c,
+        [
+            (1.0 - f.x) * (1.0 - f.y),
+            f.x * (1.0 - f.y),
+            (1.0 - f.x) * f.y,
+            f.x * f.y,
+        ],
+    ))
 }
 
 /// [`bilinear`] over all four points, `None` for those off the lattice.

@@ -25,7 +25,7 @@ pub(crate) struct PcgResult {
 }
 
 impl Pcg {
-    /// Solves `A x = b` from the `x` given, until the largest residual is at most `tolerance`
+    /// Solves `A x = b` from the `x` given (zero off the fluid), until the largest residual is at most `tolerance`
     /// times the largest `|b|` (or `max_iterations`).
     pub fn solve(
         &mut self,
@@ -40,6 +40,10 @@ impl Pcg {
             v.clear();
             v.resize(n, 0.0);
         }
+        debug_assert!(
+            (0..n).all(|c| a.is_fluid(c) || x[c] == 0.0),
+            "the start is zero off the fluid"
+        );
         let b_max = b.iter().fold(0.0f64, |m, b| m.max(b.abs()));
         let x_in = &*x;
         let mut r_max = fold_max(&mut self.r, parallel, |c, r| {

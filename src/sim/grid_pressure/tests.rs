@@ -233,7 +233,9 @@ fn tank_equations(n: usize) -> Laplacian {
         kind,
         diag: vec![0.0; n * n],
         off: (n * n) as f32,
+        edge: Vec::new(),
     };
+    equations.mark_edges();
     equations.set_plain_diagonal();
     equations
 }

@@ -1,0 +1,93 @@
+//! The density solve's start from a coarse grid ([`DfsphSettings::grid_start`]): the pressure
+//! that makes the predicted velocities divergence-free on a grid under the particles
+//! ([`grid_pressure`](crate::sim::grid_pressure)), read back at each particle as its starting
+//! stiffness `κ = p/ρ₀` where it is above the warm start. The grid carries the smooth, fluid-wide part of the pressure (a
+//! column's weight), which the local iterations remove slowest; the iterations that follow
+//! correct what the grid cannot see (under two cells, near the surface and in splashes).
+//!
+//! [`DfsphSettings::grid_start`]: crate::sim::config::DfsphSettings::grid_start
+
+use super::Dfsph;
+use crate::sim::config::SphConstants;
+use crate::sim::grid_pressure::{GridInput, GridPressure, GridPressureSettings, GridReport};
+use crate::sim::layout::{FluidSnapshot, Walls};
+use crate::sim::parallel::{Parallel, for_each_slot};
+use bevy::math::Vec2;
+
+/// The grid's solve: cells of two spacings, solved until the largest residual is a
+/// thousandth of the largest divergence (the iterations after it correct the rest; measured on
+/// the demo's surge and the resting layers, a ten-thousandth gained nothing but a V-cycle).
+const SETTINGS: GridPressureSettings = GridPressureSettings {
+    cell_ratio: 2.0,
+    tolerance: 1e-3,
+    max_iterations: 50,
+};
+
+/// The grid and what it reads, kept from sub-step to sub-step (the grid warm-starts from its
+/// last pressure).
+#[derive(Debug, Clone)]
+pub(super) struct GridStart {
+    grid: GridPressure,
+    /// The particles' positions by sorted slot.
+    positions: Vec<Vec2>,
+}
+
+impl Default for GridStart {
+    fn default() -> Self {
+        Self {
+            grid: GridPressure::new(SETTINGS),
+            positions: Vec::new(),
+        }
+    }
+}
+
+impl Dfsph {
+    /// Step 4, between the prediction and the density solve: raises every particle's starting
+    /// stiffness (its warm start) to the grid pressure of the predicted velocities over a step
+    /// of `dt` seconds, where that is higher. The grid carries the smooth part the warm start
+    /// loses (a column's weight, which the last sub-step's few iterations left short), the warm
+    /// start the peaks the grid cannot resolve (an impact under two cells). Measured on the
+    /// demo's surge at 4 + 1 iterations: the 99th percentile of the density excess read 0.8-1.4%
+    /// at worst from the larger of the two, 2.9% (at 5 + 1) from the grid's alone. Returns what
+    /// the grid's solve did.
+    pub fn start_from_grid(
+        &mut self,
+        c: &SphConstants,
+        (fluid, walls): (&FluidSnapshot, &Walls),
+        dt: f32,
+        parallel: &impl Parallel,
+    ) -> GridReport {
+        let GridStart { grid, positions } = &mut self.grid_start;
+        positions.clear();
+        positions.extend((0..fluid.len()).map(|slot| fluid.points.get(slot)));
+        let input = GridInput {
+            positions,
+            velocities: &self.velocity,
+            spacing: c.spacing,
+            rest_density: c.rest_density,
+            dt,
+            gravity: c.gravity,
+            tank: c.tank,
+        };
+        let report = grid.solve(&input, |x| solid_velocity(walls, x), parallel);
+        let (grid, positions) = (&*grid, &*positions);
+        let to_stiffness = 1.0 / c.rest_density;
+        for_each_slot(&mut self.kappa, parallel, |slot, kappa| {
+            *kappa = kappa.max(to_stiffness * grid.pressure_at(positions[slot]));
+            0.0
+        });
+        report
+    }
+}
+
+/// The velocity of the obstacle (at rest) or moving solid at `x`, if `x` is inside one.
+fn solid_velocity(walls: &Walls, x: Vec2) -> Option<Vec2> {
+    if walls.obstacles.iter().any(|o| o.distance(x).0 < 0.0) {
+        return Some(Vec2::ZERO);
+    }
+    walls
+        .solids
+        .iter()
+        .find(|s| s.distance(x).0 < 0.0)
+        .map(|s| s.point_velocity(x))
+}
