@@ -16,6 +16,12 @@ pub enum CellKind {
 
 /// The pressure equations `(A p)_c = diag_c p_c − off Σ_{fluid n} p_n` over the fluid cells of
 /// an `nx` × `ny` rectangle (row-major, `c = j nx + i`); cells outside it are solid.
+///
+/// The solvers work on the unknowns alone ([`number_unknowns`](Self::number_unknowns)): the
+/// fluid cells numbered in row-major order, each with its four neighbours' numbers, a missing
+/// or non-fluid neighbour numbered [`unknowns`](Self::unknowns) (one past the last), the slot
+/// every vector over the unknowns keeps at zero. A fluid layer fills a fraction of the
+/// rectangle bounding it, so its passes touch only that fraction.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub(crate) struct Laplacian {
     /// Columns.
@@ -29,14 +35,27 @@ pub(crate) struct Laplacian {
     pub diag: Vec<f32>,
     /// `1/h²`, 1/m²: the coupling to a fluid neighbour (negated).
     pub off: f32,
-    /// Whether each cell is fluid on the rectangle's edge ([`Laplacian::mark_edges`]).
-    pub edge: Vec<bool>,
+    /// The rectangle's cell of each unknown.
+    pub cells: Vec<u32>,
+    /// Each cell's unknown, [`unknowns`](Self::unknowns) off the fluid.
+    pub unknown: Vec<u32>,
+    /// Each unknown's four neighbours (left, right, down, up) as unknowns, [`unknowns`](Self::unknowns)
+    /// where there is none.
+    pub stencil: Vec<[u32; 4]>,
+    /// Each unknown's diagonal.
+    pub unknown_diag: Vec<f32>,
 }
 
 impl Laplacian {
     /// Number of cells.
     pub fn len(&self) -> usize {
         self.kind.len()
+    }
+
+    /// Number of unknowns (fluid cells), also the zero slot's index.
+    #[inline]
+    pub fn unknowns(&self) -> usize {
+        self.cells.len()
     }
 
     /// The four neighbours of cell `c` (left, right, down, up), `None` outside the rectangle.
@@ -76,48 +95,48 @@ impl Laplacian {
         self.kind[c] == CellKind::Fluid
     }
 
-    /// `Σ x_n` over the neighbours of fluid cell `c`, for an `x` that is zero off the fluid (so
-    /// air and solid neighbours add nothing): the four at once inside the rectangle, those on it
-    /// along its edge.
+    /// `(A x)_k` of unknown `k` in f64, `x` over the unknowns with its zero slot.
     #[inline]
-    fn neighbor_sum<T: Copy + Default + core::ops::Add<Output = T>>(&self, c: usize, x: &[T]) -> T {
-        if self.edge[c] {
-            return self
-                .neighbors(c)
-                .into_iter()
-                .flatten()
-                .fold(T::default(), |sum, n| sum + x[n]);
-        }
-        (x[c - 1] + x[c + 1]) + (x[c - self.nx] + x[c + self.nx])
+    pub fn apply_f64(&self, k: usize, x: &[f64]) -> f64 {
+        let [l, r, d, u] = self.stencil[k].map(|n| x[n as usize]);
+        f64::from(self.unknown_diag[k]) * x[k] - f64::from(self.off) * ((l + r) + (d + u))
     }
 
-    /// `(A x)_c` in f64 (zero off the fluid), for an `x` that is zero off the fluid.
+    /// `(A x)_k` of unknown `k` in f32, `x` over the unknowns with its zero slot.
     #[inline]
-    pub fn apply_f64(&self, c: usize, x: &[f64]) -> f64 {
-        if !self.is_fluid(c) {
-            return 0.0;
-        }
-        f64::from(self.diag[c]) * x[c] - f64::from(self.off) * self.neighbor_sum(c, x)
+    pub fn apply_f32(&self, k: usize, x: &[f32]) -> f32 {
+        let [l, r, d, u] = self.stencil[k].map(|n| x[n as usize]);
+        self.unknown_diag[k] * x[k] - self.off * ((l + r) + (d + u))
     }
 
-    /// `(A x)_c` in f32 (zero off the fluid), for an `x` that is zero off the fluid.
-    #[inline]
-    pub fn apply_f32(&self, c: usize, x: &[f32]) -> f32 {
-        if !self.is_fluid(c) {
-            return 0.0;
+    /// Numbers the unknowns and gathers their stencils and diagonals (call it once the kinds
+    /// and the diagonal are set).
+    pub fn number_unknowns(&mut self) {
+        self.cells.clear();
+        let kind = &self.kind;
+        self.cells.extend(
+            (0..kind.len())
+                .filter(|&c| kind[c] == CellKind::Fluid)
+                .map(|c| c as u32),
+        );
+        let none = self.cells.len() as u32;
+        self.unknown.clear();
+        self.unknown.resize(self.len(), none);
+        for (k, &c) in self.cells.iter().enumerate() {
+            self.unknown[c as usize] = k as u32;
         }
-        self.diag[c] * x[c] - self.off * self.neighbor_sum(c, x)
-    }
-
-    /// Marks the fluid cells on the rectangle's edge, whose neighbours are looked up one by one
-    /// (call it once the kinds are set).
-    pub fn mark_edges(&mut self) {
-        let (nx, ny) = (self.nx, self.ny);
-        self.edge.clear();
-        self.edge.extend((0..self.len()).map(|c| {
-            let (i, j) = (c % nx, c / nx);
-            self.kind[c] == CellKind::Fluid && (i == 0 || j == 0 || i + 1 == nx || j + 1 == ny)
+        let mut stencil = core::mem::take(&mut self.stencil);
+        stencil.clear();
+        let this = &*self;
+        stencil.extend(this.cells.iter().map(|&c| {
+            this.neighbors(c as usize)
+                .map(|n| n.map_or(none, |n| this.unknown[n]))
         }));
+        self.stencil = stencil;
+        self.unknown_diag.clear();
+        let diag = &self.diag;
+        self.unknown_diag
+            .extend(self.cells.iter().map(|&c| diag[c as usize]));
     }
 
     /// The equations of the same cells with every air neighbour at a whole cell (`θ = 1`):
@@ -137,13 +156,14 @@ impl Laplacian {
         }
     }
 
-    /// The equations one level coarser, cells of twice the size: a coarse cell is air if any
-    /// of its (up to four) cells is, else fluid if any is, else solid (McAdams, Sifakis & Teran
-    /// 2010).
-    pub fn coarsen(&self) -> Self {
+    /// The equations one level coarser, cells of twice the size, into `coarse` (its storage
+    /// reused): a coarse cell is air if any of its (up to four) cells is, else fluid if any is,
+    /// else solid (McAdams, Sifakis & Teran 2010).
+    pub fn coarsen_into(&self, coarse: &mut Self) {
         let (nx, ny) = (self.nx.div_ceil(2), self.ny.div_ceil(2));
-        let mut kind = vec![CellKind::Solid; nx * ny];
-        for (c, kind) in kind.iter_mut().enumerate() {
+        (coarse.nx, coarse.ny, coarse.off) = (nx, ny, self.off / 4.0);
+        coarse.kind.clear();
+        coarse.kind.extend((0..nx * ny).map(|c| {
             let (ci, cj) = (c % nx, c / nx);
             let mut any_fluid = false;
             for (i, j) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
@@ -152,33 +172,20 @@ impl Laplacian {
                     continue;
                 }
                 match self.kind[j * self.nx + i] {
-                    CellKind::Air => {
-                        *kind = CellKind::Air;
-                        break;
-                    }
+                    CellKind::Air => return CellKind::Air,
                     CellKind::Fluid => any_fluid = true,
                     CellKind::Solid => {}
                 }
             }
-            if *kind != CellKind::Air && any_fluid {
-                *kind = CellKind::Fluid;
+            if any_fluid {
+                CellKind::Fluid
+            } else {
+                CellKind::Solid
             }
-        }
-        let mut coarse = Self {
-            nx,
-            ny,
-            kind,
-            diag: vec![0.0; nx * ny],
-            off: self.off / 4.0,
-            edge: Vec::new(),
-        };
-        coarse.mark_edges();
+        }));
+        coarse.diag.clear();
+        coarse.diag.resize(nx * ny, 0.0);
         coarse.set_plain_diagonal();
-        coarse
-    }
-
-    /// Number of fluid cells.
-    pub fn fluid_cells(&self) -> usize {
-        self.kind.iter().filter(|&&k| k == CellKind::Fluid).count()
+        coarse.number_unknowns();
     }
 }

@@ -191,12 +191,17 @@ impl GridPressure {
         self.previous.2.clone_from(&self.pressure);
         self.report = GridReport {
             cells: self.equations.len(),
-            fluid_cells: self.equations.fluid_cells(),
+            fluid_cells: self.equations.unknowns(),
             levels: self.multigrid.depth(),
             iterations: result.iterations,
             relative_residual: result.relative_residual as f32,
         };
         self.report
+    }
+
+    /// The height of the last solve's rectangle of cells, m (zero without one).
+    pub fn height(&self) -> f32 {
+        self.equations.ny as f32 * self.cell
     }
 
     /// The pressure at `x`, Pa: bilinear between the cell centres of the last solve, extended
@@ -206,7 +211,7 @@ impl GridPressure {
             return 0.0;
         }
         let g = x / self.cell - self.first.as_vec2() - Vec2::splat(0.5);
-        let base = g.floor();
+        let base = floor(g);
         let f = g - base;
         let (i, j) = (base.x as i64, base.y as i64);
         let value = |di: i64, dj: i64| self.cell_value(i + di, j + dj);
@@ -349,7 +354,6 @@ impl GridPressure {
                 self.equations.kind[c] = CellKind::Fluid;
             }
         }
-        self.equations.mark_edges();
         for axis in 0..2 {
             let faces = &mut self.faces[axis];
             faces.clear();
@@ -378,7 +382,7 @@ impl GridPressure {
                 }
             }
             if kept > 0.0 {
-                let own = g.floor();
+                let own = floor(g);
                 let own = own.y as usize * nx + own.x as usize;
                 if kind[own] != CellKind::Solid {
                     fill[own] += kept;
@@ -386,7 +390,7 @@ impl GridPressure {
             }
             return;
         }
-        let own = g.floor();
+        let own = floor(g);
         let own = (own.x >= 0.0 && own.y >= 0.0 && own.x < nx as f32 && own.y < ny as f32)
             .then(|| own.y as usize * nx + own.x as usize)
             .filter(|&c| kind[c] != CellKind::Solid);
@@ -444,6 +448,7 @@ impl GridPressure {
             e.diag[c] = diag * e.off;
             self.rhs[c] = scale * f64::from(divergence(&self.faces, c, (e.nx, e.ny), self.cell));
         }
+        e.number_unknowns();
     }
 
     /// Step 4's start: the last solve's pressure where the same lattice cell was fluid.
@@ -546,6 +551,14 @@ fn divergence(faces: &[Vec<f32>; 2], c: usize, (nx, _ny): (usize, usize), cell: 
     (u[1] - u[0] + v_high - v_low) / cell
 }
 
+/// `g.floor()` for coordinates under 2³¹ in size, in two conversions: `f32::floor` is a library
+/// call on targets without SSE4.1, and the splat takes three of these per particle.
+#[inline]
+fn floor(g: Vec2) -> Vec2 {
+    let truncated = g.as_ivec2().as_vec2();
+    truncated - Vec2::select(truncated.cmpgt(g), Vec2::ONE, Vec2::ZERO)
+}
+
 /// Calls `add(index, weight)` for the (up to four) points of a `columns` × `rows` lattice about
 /// `g` (lattice coordinates) that lie on it, with their bilinear weights.
 fn bilinear(g: Vec2, (columns, rows): (usize, usize), mut add: impl FnMut(usize, f32)) {
@@ -570,7 +583,7 @@ fn bilinear(g: Vec2, (columns, rows): (usize, usize), mut add: impl FnMut(usize,
 /// on it.
 #[inline]
 fn stencil(g: Vec2, (columns, rows): (usize, usize)) -> Option<(usize, [f32; 4])> {
-    let base = g.floor();
+    let base = floor(g);
     let on = base.x >= 0.0
         && base.y >= 0.0
         && base.x + 1.0 < columns as f32
@@ -593,7 +606,7 @@ fn stencil(g: Vec2, (columns, rows): (usize, usize)) -> Option<(usize, [f32; 4])
 
 /// [`bilinear`] over all four points, `None` for those off the lattice.
 fn bilinear_all(g: Vec2, (columns, rows): (usize, usize), mut add: impl FnMut(Option<usize>, f32)) {
-    let base = g.floor();
+    let base = floor(g);
     let f = g - base;
     for (di, dj, w) in [
         (0, 0, (1.0 - f.x) * (1.0 - f.y)),

@@ -6,9 +6,12 @@ use super::laplacian::Laplacian;
 use super::multigrid::Multigrid;
 use crate::sim::parallel::{Parallel, for_each_slot};
 
-/// The vectors of a solve, kept between solves.
+/// The vectors of a solve over the unknowns (each with the zero slot last), kept between
+/// solves.
 #[derive(Debug, Clone, Default)]
 pub(crate) struct Pcg {
+    b: Vec<f64>,
+    x: Vec<f64>,
     r: Vec<f64>,
     z: Vec<f64>,
     d: Vec<f64>,
@@ -25,8 +28,9 @@ pub(crate) struct PcgResult {
 }
 
 impl Pcg {
-    /// Solves `A x = b` from the `x` given (zero off the fluid), until the largest residual is at most `tolerance`
-    /// times the largest `|b|` (or `max_iterations`).
+    /// Solves `A x = b` (both over the rectangle's cells) from the `x` given, until the largest
+    /// residual is at most `tolerance` times the largest `|b|` (or `max_iterations`); `x` is
+    /// written on the fluid cells only.
     pub fn solve(
         &mut self,
         (a, mg): (&Laplacian, &mut Multigrid),
@@ -35,23 +39,35 @@ impl Pcg {
         (tolerance, max_iterations): (f64, u32),
         parallel: &impl Parallel,
     ) -> PcgResult {
-        let n = a.len();
+        let n = a.unknowns();
         for v in [&mut self.r, &mut self.z, &mut self.d, &mut self.q] {
             v.clear();
-            v.resize(n, 0.0);
+            v.resize(n + 1, 0.0);
         }
-        debug_assert!(
-            (0..n).all(|c| a.is_fluid(c) || x[c] == 0.0),
-            "the start is zero off the fluid"
-        );
-        let b_max = b.iter().fold(0.0f64, |m, b| m.max(b.abs()));
-        let x_in = &*x;
-        let mut r_max = fold_max(&mut self.r, parallel, |c, r| {
-            *r = if a.is_fluid(c) {
-                b[c] - a.apply_f64(c, x_in)
-            } else {
-                0.0
-            };
+        for (v, from) in [(&mut self.b, b), (&mut self.x, &*x)] {
+            v.clear();
+            v.extend(a.cells.iter().map(|&c| from[c as usize]));
+            v.push(0.0);
+        }
+        let result = self.iterate((a, mg), (tolerance, max_iterations), parallel);
+        for (&c, &value) in a.cells.iter().zip(&self.x) {
+            x[c as usize] = value;
+        }
+        result
+    }
+
+    /// The conjugate gradients on the gathered `b` and `x`.
+    fn iterate(
+        &mut self,
+        (a, mg): (&Laplacian, &mut Multigrid),
+        (tolerance, max_iterations): (f64, u32),
+        parallel: &impl Parallel,
+    ) -> PcgResult {
+        let n = a.unknowns();
+        let b_max = self.b.iter().fold(0.0f64, |m, b| m.max(b.abs()));
+        let (b, x) = (&self.b, &self.x);
+        let mut r_max = fold_max(&mut self.r[..n], parallel, |k, r| {
+            *r = b[k] - a.apply_f64(k, x);
             *r
         });
         let goal = tolerance * b_max;
@@ -65,20 +81,20 @@ impl Pcg {
         while iterations < max_iterations {
             iterations += 1;
             let d = &self.d;
-            let dq = for_each_slot(&mut self.q, parallel, |c, q| {
-                *q = a.apply_f64(c, d);
-                *q * d[c]
+            let dq = for_each_slot(&mut self.q[..n], parallel, |k, q| {
+                *q = a.apply_f64(k, d);
+                *q * d[k]
             });
             if dq <= 0.0 {
                 break;
             }
             let alpha = rz / dq;
-            for (x, d) in x.iter_mut().zip(d) {
+            for (x, d) in self.x.iter_mut().zip(d) {
                 *x += alpha * d;
             }
             let q = &self.q;
-            r_max = fold_max(&mut self.r, parallel, |c, r| {
-                *r -= alpha * q[c];
+            r_max = fold_max(&mut self.r[..n], parallel, |k, r| {
+                *r -= alpha * q[k];
                 *r
             });
             if r_max <= goal {
