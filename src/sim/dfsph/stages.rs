@@ -76,7 +76,9 @@ impl PressureStages for Dfsph {
         let (order, acceleration) = (s.snapshot.grid().order(), &particles.acceleration);
         let most = self.predict(dt, |slot| acceleration[order[slot] as usize]);
         if c.dfsph.grid_start && !self.is_empty() && dt > 0.0 {
-            let grid = self.start_from_grid(&c, (&s.snapshot, &s.walls), dt, parallel);
+            let first_of_tick = s.clock.substeps == 1;
+            let grid =
+                self.start_from_grid(&c, (&s.snapshot, &s.walls), (dt, first_of_tick), parallel);
             self.report.grid_iterations = grid.iterations;
         }
         let iterations = self.solve_density(&c, dt, most, parallel);

@@ -4,7 +4,8 @@
 //! ([`DfsphSettings::grid_start`](super::config::DfsphSettings::grid_start)).
 //!
 //! Each solve ([`GridPressure::solve`]):
-//! 1. A rectangle of square cells of [`GridPressureSettings::cell_ratio`] particle spacings,
+//! 1. A rectangle of square cells of [`GridPressureSettings::cell_ratio`] particle spacings
+//!    (fitted to a whole number across the tank's width, so its side walls lie on cell faces),
 //!    on a lattice fixed to the world's origin (the tank's inner corner), bounded to the
 //!    particles and padded by two cells (and to the tank and its walls).
 //! 2. Cells whose centre lies outside the tank or inside a solid are solid, with the solid's
@@ -19,7 +20,8 @@
 //!    `φ = ½ − fill` crosses zero (the ghost-fluid method: Gibou et al. 2002, as in Enright,
 //!    Nguyen, Gibou & Fedkiw 2003), no flow through solids but their own. The equations are
 //!    solved by conjugate gradients preconditioned with a multigrid V-cycle (McAdams, Sifakis &
-//!    Teran 2010), warm-started from the last solve's pressure cell by cell.
+//!    Teran 2010), warm-started from the last solve's pressure cell by cell unless told to
+//!    [`forget`](GridPressure::forget) it.
 //! 5. [`GridPressure::pressure_at`] reads the pressure back at any point, bilinearly between
 //!    cell centres, from a field extended past the fluid: into solid cells hydrostatically
 //!    (`p + ρ₀ g·Δx` from the fluid neighbour, so a particle at the floor reads the floor's
@@ -162,7 +164,7 @@ impl GridPressure {
         parallel: &impl Parallel,
     ) -> GridReport {
         self.report = GridReport::default();
-        self.cell = self.settings.cell_ratio * input.spacing;
+        self.cell = cell_size(self.settings.cell_ratio * input.spacing, input.tank);
         self.weight = input.rest_density * input.gravity;
         if !self.place(input) {
             self.equations = Laplacian::default();
@@ -199,9 +201,9 @@ impl GridPressure {
         self.report
     }
 
-    /// The height of the last solve's rectangle of cells, m (zero without one).
-    pub fn height(&self) -> f32 {
-        self.equations.ny as f32 * self.cell
+    /// Forgets the last solve's pressure: the next solve starts from zero, as the first did.
+    pub fn forget(&mut self) {
+        self.previous.2.clear();
     }
 
     /// The pressure at `x`, Pa: bilinear between the cell centres of the last solve, extended
@@ -602,6 +604,20 @@ fn stencil(g: Vec2, (columns, rows): (usize, usize)) -> Option<(usize, [f32; 4])
             f.x * f.y,
         ],
     ))
+}
+
+/// The side of the cells, m: `nominal`, stretched or shrunk to fit a whole number of cells
+/// across the tank's width, if any, so that both side walls (as the floor, on the lattice's
+/// origin) lie on cell faces. A wall through the middle of a cell moved the solid boundary by
+/// up to half a cell on one side: in a layer at rest against it the particles circulated at
+/// 16% of `√(gD)`.
+fn cell_size(nominal: f32, tank: Option<Tank>) -> f32 {
+    match tank {
+        Some(tank) if nominal > 0.0 && tank.size().x > nominal => {
+            tank.size().x / (tank.size().x / nominal).round()
+        }
+        _ => nominal,
+    }
 }
 
 /// [`bilinear`] over all four points, `None` for those off the lattice.
