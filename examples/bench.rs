@@ -31,7 +31,7 @@
 
 use bevy::prelude::*;
 use bevy::time::TimeUpdateStrategy;
-use bevy_sph2d::fluid::{MovingSolid, Pose, SliceFluid, SolidMotion, SphConstants};
+use bevy_sph2d::fluid::{DfsphSettings, MovingSolid, Pose, SliceFluid, SolidMotion, SphConstants};
 use bevy_sph2d::fluid::{PressureSolver, SphParams, SphSolver, StageProfile, SubstepPart, Tank};
 use bevy_sph2d::gameplay::SCENARIO_TANK;
 use bevy_sph2d::gameplay::{FluidBlock, ScenarioKind, SphScenario};
@@ -101,24 +101,27 @@ struct Cli {
     /// --density-iterations).
     #[arg(long, requires = "density_iterations", value_parser = clap::value_parser!(u32).range(0..=10_000))]
     divergence_iterations: Option<u32>,
-    /// DFSPH: start the density solve from a pressure on a coarse grid.
+    /// DFSPH: the strict reference solve (`DfsphSettings::reference`: each solve to its
+    /// tolerance, no grid start) instead of the default's fixed budget from the grid.
     #[arg(long)]
-    grid_start: bool,
+    reference: bool,
     /// With --realtime: where a sub-step's time goes, a line per part before the last line.
     #[arg(long, requires = "realtime")]
     breakdown: bool,
 }
 
 impl Cli {
-    /// `params` with the DFSPH budget of --density-iterations and --divergence-iterations, if
-    /// given.
+    /// `params` with the strict solve of --reference and the DFSPH budget of
+    /// --density-iterations and --divergence-iterations, if given.
     fn budgeted(&self, mut params: SphParams) -> SphParams {
+        if self.reference {
+            params.dfsph = DfsphSettings::reference();
+        }
         if let (Some(density), Some(divergence)) =
             (self.density_iterations, self.divergence_iterations)
         {
             params.dfsph = params.dfsph.with_budget(density, divergence);
         }
-        params.dfsph.grid_start |= self.grid_start;
         params
     }
 }

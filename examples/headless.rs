@@ -15,7 +15,9 @@
 
 use bevy::prelude::*;
 use bevy::time::TimeUpdateStrategy;
-use bevy_sph2d::fluid::{PressureSolver, SphParams, SphSolver, Tank, refresh_fluid_state};
+use bevy_sph2d::fluid::{
+    DfsphSettings, PressureSolver, SphParams, SphSolver, Tank, refresh_fluid_state,
+};
 use bevy_sph2d::gameplay::FluidBlock;
 use bevy_sph2d::gravity::GravityAcceleration;
 use bevy_sph2d::prelude::*;
@@ -132,9 +134,10 @@ struct Cli {
     /// --density-iterations).
     #[arg(long, requires = "density_iterations", value_parser = clap::value_parser!(u32).range(0..=10_000))]
     divergence_iterations: Option<u32>,
-    /// DFSPH: start the density solve from a pressure on a coarse grid.
+    /// DFSPH: the strict reference solve (`DfsphSettings::reference`: each solve to its
+    /// tolerance, no grid start) instead of the default's fixed budget from the grid.
     #[arg(long)]
-    grid_start: bool,
+    reference: bool,
 }
 
 /// The floating body's shape.
@@ -285,10 +288,12 @@ fn configure(cli: &Cli) -> Result<Config, String> {
         ..default()
     };
     let mut params = params;
+    if cli.reference {
+        params.dfsph = DfsphSettings::reference();
+    }
     if let (Some(density), Some(divergence)) = (cli.density_iterations, cli.divergence_iterations) {
         params.dfsph = params.dfsph.with_budget(density, divergence);
     }
-    params.dfsph.grid_start = cli.grid_start;
     params.validate().map_err(|e| e.to_string())?;
     if !(0.0..=0.45).contains(&cli.jitter) {
         return Err(format!(

@@ -8,7 +8,7 @@
 //!     --layer 0.1,0.2,0.002
 //! ```
 
-use bevy_sph2d::fluid::SphParams;
+use bevy_sph2d::fluid::{DfsphSettings, SphParams};
 use bevy_sph2d::validation::{DamBreakSettling, LayerReport, RestingLayer};
 use clap::{Parser, ValueEnum};
 
@@ -58,9 +58,10 @@ struct Args {
     /// --density-iterations).
     #[arg(long, requires = "density_iterations", value_parser = clap::value_parser!(u32).range(0..=10_000))]
     divergence_iterations: Option<u32>,
-    /// DFSPH: start the density solve from a pressure on a coarse grid.
+    /// DFSPH: the strict reference solve (`DfsphSettings::reference`: each solve to its
+    /// tolerance, no grid start) instead of the default's fixed budget from the grid.
     #[arg(long)]
-    grid_start: bool,
+    reference: bool,
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -99,6 +100,9 @@ fn main() {
         Solver::Dfsph => SphParams::water(),
         Solver::Wcsph => SphParams::water_wcsph(),
     };
+    if args.reference {
+        base.dfsph = DfsphSettings::reference();
+    }
     let d = &mut base.dfsph;
     d.max_time_step = args.max_time_step.unwrap_or(d.max_time_step);
     d.density_tolerance = args.density_tolerance.unwrap_or(d.density_tolerance);
@@ -111,7 +115,6 @@ fn main() {
     {
         *d = d.with_budget(density, divergence);
     }
-    d.grid_start |= args.grid_start;
     let tick = 1.0 / args.hz;
     if let Some(particles) = args.dam_break {
         let started = std::time::Instant::now();

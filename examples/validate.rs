@@ -21,6 +21,9 @@ struct Args {
     /// Particles across the water column (20 gives 800 particles).
     #[arg(long, default_value_t = 20, value_parser = clap::value_parser!(u32).range(4..=200))]
     particles_across: u32,
+    /// DFSPH: the strict reference solve (`SphParams::reference`) instead of the default.
+    #[arg(long)]
+    reference: bool,
 }
 
 const SIZE: (u32, u32) = (900, 560);
@@ -34,7 +37,14 @@ fn main() {
     };
     let mut runs = Vec::new();
     for (solver, base) in [
-        (PressureSolver::Dfsph, SphParams::water()),
+        (
+            PressureSolver::Dfsph,
+            if args.reference {
+                SphParams::reference()
+            } else {
+                SphParams::water()
+            },
+        ),
         (PressureSolver::Wcsph, SphParams::water_wcsph()),
     ] {
         let started = std::time::Instant::now();

@@ -5,7 +5,7 @@
 
 use super::MAX_FRAME_TIME;
 use crate::coupling::{FluidCoupled, FluidCouplingPlugin};
-use crate::fluid::{DfsphSettings, FluidForce, SphParams, SphPlugin, Submerged, Tank};
+use crate::fluid::{FluidForce, SphParams, SphPlugin, Submerged, Tank};
 use crate::gameplay::FluidBlock;
 use crate::render::{ParticleCamera, ParticleDraw, ParticleView, RenderMode};
 use crate::schedule::ParticleSystems;
@@ -52,21 +52,15 @@ pub struct Paddle;
 
 /// The harbour's water: [`SphParams::water`] at a 2 cm spacing (about 1,100 particles) in the
 /// [`HARBOUR_TANK`], with the demo's speed of sound and sub-step cap (see
-/// [`demo_params`](super::demo_params)), and at most 20 density iterations a sub-step. With
-/// the five bodies in the water the density solve's largest-error stop is seldom met: measured
-/// at a 1.5 cm spacing, every sub-step ran to the default cap of 300 (0.12 times real time on
-/// two cores); capped at 20 the bodies still float at their drafts and the harbour keeps real
-/// time.
+/// [`demo_params`](super::demo_params)). The default solve's fixed budget needs no cap with the
+/// five bodies in the water (the strict solve's largest-error stop was seldom met there, and it
+/// ran to 300 iterations a sub-step).
 pub fn harbour_params() -> SphParams {
     SphParams {
         tank: Some(Tank::new(HARBOUR_TANK.x, HARBOUR_TANK.y)),
         particle_spacing: 0.02,
         speed_of_sound: 30.0,
         max_substeps: 40,
-        dfsph: DfsphSettings {
-            max_density_iterations: 20,
-            ..DfsphSettings::default()
-        },
         ..SphParams::water()
     }
 }

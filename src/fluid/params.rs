@@ -205,6 +205,15 @@ impl SphParams {
         }
     }
 
+    /// [`water`](Self::water) with the strict DFSPH solve ([`DfsphSettings::reference`]): each
+    /// solve to its tolerance, whatever the iterations. What the default is checked against.
+    pub fn reference() -> Self {
+        Self {
+            dfsph: DfsphSettings::reference(),
+            ..Self::water()
+        }
+    }
+
     /// [`water`](Self::water) on the weakly compressible solver ([`PressureSolver::Wcsph`]),
     /// with the support of 3 spacings that its pressure gradient needs to be accurate.
     pub fn water_wcsph() -> Self {

@@ -228,10 +228,9 @@ fn dfsph_slices_are_deterministic_across_thread_counts() {
 }
 
 #[test]
-fn grid_start_slices_are_deterministic_across_thread_counts() {
-    // The grid's passes run in parallel chunks too at this spacing.
+fn reference_slices_are_deterministic_across_thread_counts() {
     let p = SphParams {
-        dfsph: bevy_sph2d::fluid::DfsphSettings::grid_budget(),
+        dfsph: bevy_sph2d::fluid::DfsphSettings::reference(),
         ..dfsph_fine()
     };
     let positions = block(1).positions_for(&p);

@@ -207,8 +207,8 @@ fn galaxy_scenario_writes_gravity_frames() {
 
 /// `--scenario float` (feature `avian`): one avian box released at the water level; the
 /// bodies' CSV has its header and a row per frame, and the fluid's force on the box carries
-/// its weight (0.2 m × 0.1 m at 500 kg/m³: 98.1 N/m) within 15% on average over the second
-/// second (it bobs).
+/// its weight (0.2 m × 0.1 m at 500 kg/m³: 98.1 N/m) within 15% on average over the last
+/// three seconds (it bobs).
 #[cfg(feature = "avian")]
 #[test]
 fn float_scenario_writes_the_body_track() {
@@ -235,9 +235,9 @@ fn float_scenario_writes_the_body_track() {
             "--spacing",
             "0.02",
             "--duration",
-            "2",
+            "4",
             "--every",
-            "0.1",
+            "0.02",
             "--bodies-out",
             bodies.to_str().unwrap(),
         ],
@@ -254,9 +254,11 @@ fn float_scenario_writes_the_body_track() {
     let track: Vec<Vec<f64>> = lines
         .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
         .collect();
-    assert_eq!(track.len(), 21, "frames every 0.1 s from 0 to 2 s: {csv}");
+    assert_eq!(track.len(), 201, "frames every 0.02 s from 0 to 4 s: {csv}");
     assert!(track.iter().flatten().all(|v| v.is_finite()));
-    let late = &track[10..];
+    // The force of a tick swings by about 45 N/m about the weight with either solver: its mean
+    // over the last 3 s (150 frames) is within a few percent (over 11 frames it read 79-113).
+    let late = &track[50..];
     let lift = late.iter().map(|r| r[9]).sum::<f64>() / late.len() as f64;
     assert!(
         late.iter().all(|r| (r[3] - 0.2).abs() < 0.03),

@@ -3,7 +3,7 @@
 
 use crate::common::*;
 use bevy::prelude::*;
-use bevy_sph2d::fluid::{DfsphSettings, SphParams, Tank};
+use bevy_sph2d::fluid::{SphParams, Tank};
 use bevy_sph2d::gameplay::FluidBlock;
 use bevy_sph2d::prelude::*;
 use bevy_sph2d::validation::{DamBreakSettling, MartinMoyce, RestingLayer, compare};
@@ -326,10 +326,12 @@ fn momentum(base: SphParams) {
 }
 
 /// Resting layers 25, 50 and 100 particles deep at spacings from 2 to 20 mm settle to
-/// hydrostatic under the default solver within 2 s (before the depth fixes, a layer 50 deep
-/// boiled with its floor rows compressed by several percent): the pressure slope within 3% of
-/// ρ₀g, the interior within 1% of rest density, and no particle faster than 1% of `√(gD)`
-/// (2% at 20 mm, where the free surface still ripples at the particle scale after 2 s: 1.2–1.6%).
+/// hydrostatic within 2 s, under the default solver (4 + 1 iterations started from the grid) and
+/// the strict reference (before the depth fixes, a layer 50 deep boiled with its floor rows
+/// compressed by several percent; without the grid, 3 + 1 iterations read slopes of 0.75-1.19
+/// and particles at 54-109% of `√(gD)`): the pressure slope within 3% of ρ₀g, the interior
+/// within 1% of rest density, and no particle faster than 1% of `√(gD)` (2% at 20 mm, where the
+/// free surface still ripples at the particle scale after 2 s: 1.2–1.6%).
 #[test]
 fn resting_layers_settle_to_hydrostatic_at_every_depth() {
     let layers = [
@@ -340,17 +342,23 @@ fn resting_layers_settle_to_hydrostatic_at_every_depth() {
         (RestingLayer::new(1.0, 0.5, 0.01), 100),
         (RestingLayer::new(2.0, 1.0, 0.02), 100),
     ];
-    for (layer, deep) in layers {
-        assert_eq!(layer.particles_deep(), deep);
-        let r = layer
-            .run(SphParams::water(), 2.0, 0.5, 1.0 / 64.0)
-            .expect("the preset validates");
-        println!("{layer:?}: {r:?}");
-        let fastest = if layer.spacing >= 0.02 { 0.02 } else { 0.01 };
-        assert!(
-            (r.slope - 1.0).abs() <= 0.03 && r.compression <= 0.01 && r.fastest <= fastest,
-            "{layer:?} settled to {r:?}"
-        );
+    for (base, fixed) in [(SphParams::water(), true), (SphParams::reference(), false)] {
+        for (layer, deep) in layers {
+            assert_eq!(layer.particles_deep(), deep);
+            let r = layer
+                .run(base.clone(), 2.0, 0.5, 1.0 / 64.0)
+                .expect("the preset validates");
+            println!("{:?} {layer:?}: {r:?}", base.dfsph);
+            let fastest = if layer.spacing >= 0.02 { 0.02 } else { 0.01 };
+            assert!(
+                (r.slope - 1.0).abs() <= 0.03 && r.compression <= 0.01 && r.fastest <= fastest,
+                "{:?}: {layer:?} settled to {r:?}",
+                base.dfsph
+            );
+            if fixed {
+                assert_eq!(r.density_iterations, 4.0, "{r:?}");
+            }
+        }
     }
 }
 
@@ -370,42 +378,9 @@ fn the_demo_dam_break_settles_to_hydrostatic() {
     );
 }
 
-/// The default water started from the coarse-grid pressure under a fixed 4 + 1 budget.
-fn grid_budget() -> SphParams {
-    SphParams {
-        dfsph: DfsphSettings::grid_budget(),
-        ..SphParams::water()
-    }
-}
-
 #[test]
-fn dam_break_front_follows_martin_and_moyce_grid_start() {
-    dam_break(grid_budget());
-}
-
-/// Resting layers 25, 50 and 100 particles deep settle to hydrostatic at a fixed budget of four
-/// density and one divergence iteration when the grid starts the solve, to the bars of the
-/// strict solve's test (without the grid, 3 + 1 read slopes of 0.75-1.19 and particles at 54-109%
-/// of `√(gD)`).
-#[test]
-fn the_grid_start_holds_resting_layers_at_a_fixed_budget() {
-    let layers = [
-        (RestingLayer::new(0.25, 0.5, 0.01), 25),
-        (RestingLayer::new(0.1, 0.1, 0.002), 50),
-        (RestingLayer::new(1.0, 0.5, 0.01), 100),
-    ];
-    for (layer, deep) in layers {
-        assert_eq!(layer.particles_deep(), deep);
-        let r = layer
-            .run(grid_budget(), 2.0, 0.5, 1.0 / 64.0)
-            .expect("the preset validates");
-        println!("{layer:?}: {r:?}");
-        assert!(
-            (r.slope - 1.0).abs() <= 0.03 && r.compression <= 0.01 && r.fastest <= 0.01,
-            "{layer:?} settled to {r:?}"
-        );
-        assert_eq!(r.density_iterations, 4.0, "{r:?}");
-    }
+fn dam_break_front_follows_martin_and_moyce_reference() {
+    dam_break(SphParams::reference());
 }
 
 /// The demo's surge (a column 0.48 m wide and 0.54 m high in a 1.6 m tank, 1 cm spacing) at the
@@ -417,7 +392,7 @@ fn the_grid_start_keeps_the_surge_incompressible() {
     let params = SphParams {
         tank: Some(Tank::new(1.6, 0.9)),
         particle_spacing: 0.01,
-        ..grid_budget()
+        ..SphParams::water()
     };
     let rest = params.rest_density;
     let mut app = create_app(params);

@@ -645,7 +645,7 @@ mod tests {
             support_ratio: 2.5,
             particle_spacing: 0.01,
             tank: None,
-            ..SphParams::water()
+            ..SphParams::reference()
         }
     }
 

@@ -96,13 +96,13 @@ fn a_still_column_holds_the_hydrostatic_pressure_in_every_fluid_cell() {
 
 #[test]
 fn the_cells_fit_the_tank_width_and_a_still_column_stays_level() {
-    // 0.41 m is 20.5 nominal cells of 2 cm: the cells stretch to 20 across.
+    // 0.41 m is 20.5 nominal cells of 2 cm: the cells shrink to 21 across.
     let positions = block(0.0, 0.41, 0.2);
     let velocities = fallen(&positions);
     let mut grid = GridPressure::new(GridPressureSettings::default());
     let tank = Tank::new(0.41, 0.5);
     grid.solve(&input(&positions, &velocities, tank), |_| None, &Sequential);
-    assert!((grid.cell - 0.41 / 20.0).abs() < 1e-6, "{} m", grid.cell);
+    assert!((grid.cell - 0.41 / 21.0).abs() < 1e-6, "{} m", grid.cell);
     assert_eq!(cell_size(0.02, None), 0.02);
     // Every row of fluid cells at one pressure, the last column against the wall included.
     let nx = grid.equations.nx;
