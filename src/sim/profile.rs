@@ -15,6 +15,10 @@ pub enum SubstepPart {
     DivergenceSolve,
     /// The non-pressure forces (WCSPH: every force) and their copy into the particles.
     Forces,
+    /// The start of the density solve (DFSPH): the velocities predicted under every
+    /// acceleration and, with the grid start, the pressure on the coarse grid read back at the
+    /// particles.
+    PressureStart,
     /// The density solve under every acceleration (DFSPH).
     DensitySolve,
     /// The step length, the move of every particle and the solids' impulses.
@@ -23,11 +27,12 @@ pub enum SubstepPart {
 
 impl SubstepPart {
     /// Every part, in the order of a sub-step.
-    pub const ALL: [SubstepPart; 6] = [
+    pub const ALL: [SubstepPart; 7] = [
         Self::Neighbors,
         Self::Density,
         Self::DivergenceSolve,
         Self::Forces,
+        Self::PressureStart,
         Self::DensitySolve,
         Self::Integrate,
     ];
@@ -39,6 +44,7 @@ impl SubstepPart {
             Self::Density => "density",
             Self::DivergenceSolve => "divergence_solve",
             Self::Forces => "forces",
+            Self::PressureStart => "pressure_start",
             Self::DensitySolve => "density_solve",
             Self::Integrate => "integrate",
         }

@@ -197,8 +197,21 @@ pub trait PressureStages {
     /// The longest stable step (s) under the largest acceleration, m/s².
     fn step_limit(&self, s: &Shared, max_acceleration: f32) -> f32;
 
-    /// [`Stage::Integrate`] after the step `dt` is chosen, before the move: a pressure solve
-    /// under every particle's acceleration (DFSPH's density solve); none by default.
+    /// [`Stage::Integrate`] after the step `dt` is chosen, before
+    /// [`solve_pressure`](Self::solve_pressure): what the solve starts from (DFSPH's predicted
+    /// velocities and grid pressure); nothing by default.
+    fn start_pressure(
+        &mut self,
+        _s: &mut Shared,
+        _particles: &Particles,
+        _dt: f32,
+        _parallel: &impl Parallel,
+    ) {
+    }
+
+    /// [`Stage::Integrate`] after [`start_pressure`](Self::start_pressure), before the move: a
+    /// pressure solve under every particle's acceleration (DFSPH's density solve); none by
+    /// default.
     fn solve_pressure(
         &mut self,
         _s: &mut Shared,
@@ -484,6 +497,11 @@ impl FluidStep {
             Stage::Integrate => {
                 let dt = self.timed(SubstepPart::Integrate, |step| {
                     step.take_step(particles, length)
+                });
+                self.timed(SubstepPart::PressureStart, |step| {
+                    let s = &mut step.shared;
+                    with_solver!(&mut step.solver, |solver| solver
+                        .start_pressure(s, particles, dt, parallel))
                 });
                 self.timed(SubstepPart::DensitySolve, |step| {
                     let s = &mut step.shared;

@@ -174,6 +174,9 @@ pub struct Dfsph {
     expansion_key: Option<(super::kernels::KernelKind, u32)>,
     /// The density solve's start on a coarse grid, when the settings ask for it.
     grid_start: grid_start::GridStart,
+    /// The largest acceleration of the last prediction, m/s² (what
+    /// [`predict`](Self::predict) returned, for the density solve's accuracy bound).
+    predicted_acceleration: f32,
     /// What the last sub-step did.
     pub report: DfsphReport,
 }

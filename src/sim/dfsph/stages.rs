@@ -63,9 +63,9 @@ impl PressureStages for Dfsph {
         self.stable_time_step(&s.constants, max_acceleration)
     }
 
-    /// Step 4: the density solve under every particle's acceleration (external forces
-    /// included), started from the grid pressure if the settings ask for it.
-    fn solve_pressure(
+    /// Step 4, its start: the velocities predicted under every particle's acceleration
+    /// (external forces included), and the grid pressure if the settings ask for it.
+    fn start_pressure(
         &mut self,
         s: &mut Shared,
         particles: &Particles,
@@ -74,13 +74,26 @@ impl PressureStages for Dfsph {
     ) {
         let c = s.constants;
         let (order, acceleration) = (s.snapshot.grid().order(), &particles.acceleration);
-        let most = self.predict(dt, |slot| acceleration[order[slot] as usize]);
+        self.predicted_acceleration = self.predict(dt, |slot| acceleration[order[slot] as usize]);
+        self.report.grid_iterations = 0;
         if c.dfsph.grid_start && !self.is_empty() && dt > 0.0 {
             let first_of_tick = s.clock.substeps == 1;
             let grid =
                 self.start_from_grid(&c, (&s.snapshot, &s.walls), (dt, first_of_tick), parallel);
             self.report.grid_iterations = grid.iterations;
         }
+    }
+
+    /// Step 4: the density solve from that start.
+    fn solve_pressure(
+        &mut self,
+        s: &mut Shared,
+        _particles: &Particles,
+        dt: f32,
+        parallel: &impl Parallel,
+    ) {
+        let c = s.constants;
+        let most = self.predicted_acceleration;
         let iterations = self.solve_density(&c, dt, most, parallel);
         s.iterations.density += iterations;
         s.iterations.total += iterations as u64;
