@@ -4,7 +4,9 @@
 //! it is written).
 
 use super::rows::RowsMut;
-use super::{DEFICIENT_NEIGHBORHOOD, Dfsph, SlotState, WALL_MIRROR, lattice_neighbors};
+use super::{
+    DEFICIENT_NEIGHBORHOOD, Dfsph, SlotState, WALL_MIRROR, lattice_neighbors, wall_weight,
+};
 use crate::sim::config::SphConstants;
 use crate::sim::kernels::RadialKernel;
 use crate::sim::layout::{FluidSnapshot, Walls};
@@ -134,21 +136,24 @@ impl Dfsph {
                     }
                     // A particle's own stiffness changes its density rate through its own velocity
                     // (pushed by its neighbours and the mirrored wall) and its neighbours'.
-                    let diagonal = (sums.gradient + WALL_MIRROR * wall.gradient).length_squared()
+                    let density = c.volume * sums.density.element_sum();
+                    let mirrored = wall_weight(density);
+                    let wall_gradient = mirrored * wall.gradient;
+                    let diagonal = (sums.gradient + WALL_MIRROR * wall_gradient).length_squared()
                         + sums.gradient_sq;
                     *state = SlotState {
                         count: len.min(stride) as u32,
-                        density: c.volume * sums.density.element_sum(),
+                        density,
                         factor: if diagonal > 1e-6 / c.support_sq {
                             1.0 / diagonal
                         } else {
                             0.0
                         },
                         deficient: ((len as u32 + wall.count) as f32) < deficient_below,
-                        wall_gradient: wall.gradient,
+                        wall_gradient,
                         wall_viscosity: wall.viscosity,
                         wall_drag: wall.drag,
-                        wall_flux: wall.flux,
+                        wall_flux: mirrored * wall.flux,
                         wall_head: wall.head,
                     };
                 }

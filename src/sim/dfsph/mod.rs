@@ -102,6 +102,29 @@ pub const DEFICIENT_NEIGHBORHOOD: f32 = 0.6;
 /// it, which matters where wall pressure is read).
 const WALL_MIRROR: f32 = 2.0;
 
+/// How much a wall particle weighs in the sums of a fluid particle of relative density
+/// `density`: one, and beyond [`MIRRORED_FROM`] one plus the excess, so that a wall mirrors a
+/// crushed particle's density as it mirrors its pressure.
+///
+/// Taken at the rest density, a wall weighs less than the fluid that presses a crushed particle
+/// against it, and the solve relieves such a particle by driving it into the wall, where the
+/// tank's safety net stops it. Measured on 3,000 particles spawned at four times the rest
+/// density: the layer on the floor then kept up to nine times the rest density at no pressure,
+/// a fifth of the particles ended in clumps of up to 48 times it (the strict solve as the
+/// default), and a sub-step cost 2.5 to 4 times a calm one; with the weight the block spreads
+/// to within 0.3% of the rest density.
+#[inline]
+fn wall_weight(density: f32) -> f32 {
+    1.0 + (density - MIRRORED_FROM).max(0.0)
+}
+
+/// The relative density beyond which walls mirror a particle's density ([`wall_weight`]):
+/// above any that a flow reaches (a dam break's surge stays within 2%), so that flows keep
+/// their walls bit for bit. Measured: mirrored from the rest density, the 2 m resting layer at
+/// 2 cm (100 particles deep) no longer rested under the default's fixed budget (slope 0.66,
+/// fastest 1 m/s).
+const MIRRORED_FROM: f32 = 1.1;
+
 /// Per-particle values of the current sub-step, by sorted slot.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 struct SlotState {
@@ -114,13 +137,14 @@ struct SlotState {
     factor: f32,
     /// Whether the neighbourhood is deficient (see [`DEFICIENT_NEIGHBORHOOD`]).
     deficient: bool,
-    /// `Σ_b s V ∇W_ib` over wall particles, 1/m.
+    /// `w Σ_b s V ∇W_ib` over wall particles, 1/m, with the walls' weight `w`
+    /// ([`wall_weight`]).
     wall_gradient: Vec2,
     /// `Σ_b V (r·∇W)/(r² + η²)` over wall particles (dimensionless, negative), for wall friction.
     wall_viscosity: f32,
     /// `Σ_b V (r·∇W)/(r² + η²) v_b` over wall particles, m/s: the friction of moving solids.
     wall_drag: Vec2,
-    /// `Σ_b s V ∇W_ib · v_b` over wall particles, 1/s: what moving solids add to the density
+    /// `w Σ_b s V ∇W_ib · v_b` over wall particles, 1/s: what moving solids add to the density
     /// change rate (mirrored, twice it).
     wall_flux: f32,
     /// `−Σ_b (g·(x_b − xᵢ)) s V ∇W_ib`, m/s²: the hydrostatic head of the walls' mirrored

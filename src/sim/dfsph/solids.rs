@@ -2,7 +2,7 @@
 //! push on the fluid, with the same terms as the fluid's (see the module docs of
 //! [`dfsph`](super)), so that the solids take exactly the momentum the fluid loses to them.
 
-use super::{Dfsph, WALL_MIRROR};
+use super::{Dfsph, WALL_MIRROR, wall_weight};
 use crate::sim::config::SphConstants;
 use crate::sim::density::with_kernels;
 use crate::sim::kernels::RadialKernel;
@@ -85,7 +85,8 @@ impl Dfsph {
         let divergence_dt = self.divergence_dt;
         Self::for_each_solid_pair(c, fluid, walls, |k, x, _, i, pair| {
             let push = dt * self.kappa[i] + divergence_dt * self.kappa_divergence[i];
-            let impulse = c.mass * WALL_MIRROR * push * pair.gradient;
+            let weight = wall_weight(self.state[i].density);
+            let impulse = c.mass * WALL_MIRROR * push * weight * pair.gradient;
             sums[k].0 += impulse;
             sums[k].1 += (x - centers[k]).perp_dot(impulse);
         });
