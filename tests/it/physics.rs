@@ -362,6 +362,25 @@ fn resting_layers_settle_to_hydrostatic_at_every_depth() {
     }
 }
 
+/// Deep water at a fine spacing rests under the default solver: a layer 1.5 m deep at 1 cm
+/// (150 particles deep, 15 kPa at the floor) for 3 s. When the density solve started from the
+/// larger of the grid's pressure and the warm start, the warm start's excess came back every
+/// sub-step and grew: the floor's second row swayed sideways and the layer blew up after
+/// 0.6 s (1 m deep at 1 cm after 0.8–2.2 s, depending on the last bit of a rounding).
+#[test]
+fn a_deep_layer_at_a_fine_spacing_rests() {
+    let layer = RestingLayer::new(1.5, 0.4, 0.01);
+    assert_eq!(layer.particles_deep(), 150);
+    let r = layer
+        .run(SphParams::water(), 3.0, 0.5, 1.0 / 64.0)
+        .expect("the preset validates");
+    println!("{layer:?}: {r:?}");
+    assert!(
+        (r.slope - 1.0).abs() <= 0.03 && r.compression <= 0.01 && r.fastest <= 0.01,
+        "{layer:?} settled to {r:?}"
+    );
+}
+
 /// The demo's dam break at 10,000 particles (settled depth about 32 spacings) comes to
 /// hydrostatic rest: after 12 s its averaged pressure rises at ρ₀g within 5% (it read 3.2 times
 /// ρ₀g after 6 s before the depth fixes) and no particle is compressed by 1%.

@@ -34,6 +34,7 @@
 mod laplacian;
 mod multigrid;
 mod pcg;
+mod splat;
 
 pub use laplacian::CellKind;
 
@@ -43,6 +44,7 @@ use bevy::math::{IVec2, Vec2};
 use laplacian::Laplacian;
 use multigrid::Multigrid;
 use pcg::Pcg;
+use splat::{Band, SplatInput, floor};
 
 /// A free-surface fraction `θ` (the way from a fluid cell's centre to its air neighbour's where
 /// the surface lies) is at least this: a surface right at a centre would make its equation
@@ -126,6 +128,8 @@ pub struct GridPressure {
     faces: [Vec<f32>; 2],
     /// Scratch of the faces: each one's weighted velocity sum and weight.
     face_sums: [Vec<[f32; 2]>; 2],
+    /// Scratch of the splat: its runs of particles and their sums.
+    bands: Vec<Band>,
     rhs: Vec<f64>,
     /// Pressure per fluid cell, Pa (zero elsewhere).
     pressure: Vec<f64>,
@@ -173,7 +177,7 @@ impl GridPressure {
             return self.report;
         }
         self.classify(input.tank, &solid, parallel);
-        self.splat(input);
+        self.splat(input, parallel);
         self.assemble(input);
         self.warm_start();
         self.multigrid.rebuild(&self.equations);
@@ -292,8 +296,7 @@ impl GridPressure {
     /// The centre of cell `c` of the rectangle, m.
     fn center(&self, c: usize) -> Vec2 {
         let nx = self.equations.nx;
-        let index = self.first + IVec2::new((c % nx) as i32, (c / nx) as i32);
-        (index.as_vec2() + Vec2::splat(0.5)) * self.cell
+        cell_center((self.first, self.cell), (c % nx, c / nx))
     }
 
     /// Step 2, the solids: cells outside the tank or inside a solid, with their velocities.
@@ -306,51 +309,45 @@ impl GridPressure {
         let cells = self.equations.len();
         self.solid_velocity.clear();
         self.solid_velocity.resize(cells, Vec2::ZERO);
-        let mut solids = vec![None; cells];
-        let this = &*self;
-        for_each_slot(&mut solids, parallel, |c, out| {
-            let x = this.center(c);
-            *out = match tank {
-                Some(tank) if !tank.contains(x, 0.0) => Some(Vec2::ZERO),
-                _ => solid(x),
-            };
-            0.0
-        });
-        for (c, velocity) in solids.into_iter().enumerate() {
-            if let Some(velocity) = velocity {
-                self.equations.kind[c] = CellKind::Solid;
-                self.solid_velocity[c] = velocity;
+        let (first, nx, cell) = (self.first, self.equations.nx, self.cell);
+        let mut rows: Vec<_> = (self.equations.kind.chunks_mut(nx))
+            .zip(self.solid_velocity.chunks_mut(nx))
+            .enumerate()
+            .collect();
+        parallel.for_each(&mut rows, |(j, (kinds, velocities))| {
+            for (i, (kind, velocity)) in kinds.iter_mut().zip(velocities.iter_mut()).enumerate() {
+                let x = cell_center((first, cell), (i, *j));
+                let moving = match tank {
+                    Some(tank) if !tank.contains(x, 0.0) => Some(Vec2::ZERO),
+                    _ => solid(x),
+                };
+                if let Some(moving) = moving {
+                    (*kind, *velocity) = (CellKind::Solid, moving);
+                }
             }
-        }
+        });
     }
 
     /// Steps 2 and 3, the particles: each cell's fill (then fluid or air) and each face's
     /// velocity.
-    fn splat(&mut self, input: &GridInput) {
+    fn splat(&mut self, input: &GridInput, parallel: &impl Parallel) {
         let (nx, ny) = (self.equations.nx, self.equations.ny);
-        let share = input.spacing * input.spacing / (self.cell * self.cell);
-        let origin = self.first.as_vec2();
         let lattices = [(nx + 1, ny), (nx, ny + 1)];
         for (sums, (columns, rows)) in self.face_sums.iter_mut().zip(lattices) {
             sums.clear();
             sums.resize(columns * rows, [0.0; 2]);
         }
-        for (&x, &v) in input.positions.iter().zip(input.velocities) {
-            if !(x.is_finite() && v.is_finite()) {
-                continue;
-            }
-            let g = x / self.cell - origin;
-            self.spread_volume(g, share);
-            for (axis, sums) in self.face_sums.iter_mut().enumerate() {
-                // Faces normal to x lie half a cell up from the lattice points, those normal to
-                // y half a cell right.
-                let offset = if axis == 0 { Vec2::Y } else { Vec2::X } * 0.5;
-                bilinear(g - offset, lattices[axis], |f, w| {
-                    sums[f][0] += w * v[axis];
-                    sums[f][1] += w;
-                });
-            }
-        }
+        let particles = SplatInput {
+            positions: input.positions,
+            velocities: input.velocities,
+            cell: self.cell,
+            origin: self.first.as_vec2(),
+            size: (nx, ny),
+            kind: &self.equations.kind,
+            share: input.spacing * input.spacing / (self.cell * self.cell),
+        };
+        let sums = (&mut self.fill[..], &mut self.face_sums);
+        splat::splat(&particles, &mut self.bands, sums, parallel);
         for c in 0..self.equations.len() {
             if self.equations.kind[c] != CellKind::Solid && self.fill[c] >= 0.5 {
                 self.equations.kind[c] = CellKind::Fluid;
@@ -363,46 +360,6 @@ impl GridPressure {
                 if weight > 0.0 { sum / weight } else { 0.0 }
             }));
             self.close_solid_faces(axis);
-        }
-    }
-
-    /// Adds a particle's volume (`share` of a cell) at lattice point `g` to the cells about it;
-    /// what falls on a solid cell or off the grid stays in the particle's own cell.
-    fn spread_volume(&mut self, g: Vec2, share: f32) {
-        let e = &self.equations;
-        let (nx, ny) = (e.nx, e.ny);
-        let (fill, kind) = (&mut self.fill, &e.kind);
-        if let Some((c, weights)) = stencil(g - Vec2::splat(0.5), (nx, ny)) {
-            // All four cells on the grid: the particle's own is one of them.
-            let cells = [c, c + 1, c + nx, c + nx + 1];
-            let mut kept = 0.0;
-            for (&c, w) in cells.iter().zip(weights) {
-                if kind[c] == CellKind::Solid {
-                    kept += w * share;
-                } else {
-                    fill[c] += w * share;
-                }
-            }
-            if kept > 0.0 {
-                let own = floor(g);
-                let own = own.y as usize * nx + own.x as usize;
-                if kind[own] != CellKind::Solid {
-                    fill[own] += kept;
-                }
-            }
-            return;
-        }
-        let own = floor(g);
-        let own = (own.x >= 0.0 && own.y >= 0.0 && own.x < nx as f32 && own.y < ny as f32)
-            .then(|| own.y as usize * nx + own.x as usize)
-            .filter(|&c| kind[c] != CellKind::Solid);
-        let mut kept = 0.0;
-        bilinear_all(g - Vec2::splat(0.5), (nx, ny), |c, w| match c {
-            Some(c) if kind[c] != CellKind::Solid => fill[c] += w * share,
-            _ => kept += w * share,
-        });
-        if let Some(own) = own {
-            fill[own] += kept;
         }
     }
 
@@ -553,57 +510,12 @@ fn divergence(faces: &[Vec<f32>; 2], c: usize, (nx, _ny): (usize, usize), cell: 
     (u[1] - u[0] + v_high - v_low) / cell
 }
 
-/// `g.floor()` for coordinates under 2³¹ in size, in two conversions: `f32::floor` is a library
-/// call on targets without SSE4.1, and the splat takes three of these per particle.
+/// The centre of cell `(i, j)` of a rectangle from lattice index `first`, of cells of side
+/// `cell`, m.
 #[inline]
-fn floor(g: Vec2) -> Vec2 {
-    let truncated = g.as_ivec2().as_vec2();
-    truncated - Vec2::select(truncated.cmpgt(g), Vec2::ONE, Vec2::ZERO)
-}
-
-/// Calls `add(index, weight)` for the (up to four) points of a `columns` × `rows` lattice about
-/// `g` (lattice coordinates) that lie on it, with their bilinear weights.
-fn bilinear(g: Vec2, (columns, rows): (usize, usize), mut add: impl FnMut(usize, f32)) {
-    if let Some((c, weights)) = stencil(g, (columns, rows)) {
-        for (c, w) in [c, c + 1, c + columns, c + columns + 1]
-            .into_iter()
-            .zip(weights)
-        {
-            add(c, w);
-        }
-        return;
-    }
-    bilinear_all(g, (columns, rows), |c, w| {
-        if let Some(c) = c {
-            add(c, w)
-        }
-    });
-}
-
-/// The first of the four points of a `columns` × `rows` lattice about `g` (lattice
-/// coordinates) and their bilinear weights (that point, right, up, up-right), if all four lie
-/// on it.
-#[inline]
-fn stencil(g: Vec2, (columns, rows): (usize, usize)) -> Option<(usize, [f32; 4])> {
-    let base = floor(g);
-    let on = base.x >= 0.0
-        && base.y >= 0.0
-        && base.x + 1.0 < columns as f32
-        && base.y + 1.0 < rows as f32;
-    if !on {
-        return None;
-    }
-    let f = g - base;
-    let c = base.y as usize * columns + base.x as usize;
-    Some((
-        c,
-        [
-            (1.0 - f.x) * (1.0 - f.y),
-            f.x * (1.0 - f.y),
-            (1.0 - f.x) * f.y,
-            f.x * f.y,
-        ],
-    ))
+fn cell_center((first, cell): (IVec2, f32), (i, j): (usize, usize)) -> Vec2 {
+    let index = first + IVec2::new(i as i32, j as i32);
+    (index.as_vec2() + Vec2::splat(0.5)) * cell
 }
 
 /// The side of the cells, m: `nominal`, stretched or shrunk to fit a whole number of cells
@@ -617,22 +529,6 @@ fn cell_size(nominal: f32, tank: Option<Tank>) -> f32 {
             tank.size().x / (tank.size().x / nominal).round()
         }
         _ => nominal,
-    }
-}
-
-/// [`bilinear`] over all four points, `None` for those off the lattice.
-fn bilinear_all(g: Vec2, (columns, rows): (usize, usize), mut add: impl FnMut(Option<usize>, f32)) {
-    let base = floor(g);
-    let f = g - base;
-    for (di, dj, w) in [
-        (0, 0, (1.0 - f.x) * (1.0 - f.y)),
-        (1, 0, f.x * (1.0 - f.y)),
-        (0, 1, (1.0 - f.x) * f.y),
-        (1, 1, f.x * f.y),
-    ] {
-        let (i, j) = (base.x + di as f32, base.y + dj as f32);
-        let on = i >= 0.0 && j >= 0.0 && i < columns as f32 && j < rows as f32;
-        add(on.then(|| j as usize * columns + i as usize), w);
     }
 }
 
