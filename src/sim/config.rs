@@ -98,7 +98,7 @@ impl PressureSolver {
 /// viscosity and external forces, then solves for the pressure that brings the predicted density
 /// back to rest, and moves the particles. The default ([`Default`]) runs a fixed budget of 4
 /// density and 1 divergence iterations a sub-step, the density solve started from a pressure on
-/// a coarse grid under the particles where that is above the last sub-step's
+/// a coarse grid under the particles plus most of the last sub-step's excess over it
 /// ([`grid_start`](Self::grid_start)): a cost per sub-step that does not grow with the depth in
 /// particles. [`reference`](Self::reference) solves to the tolerances instead, whatever the
 /// iterations (26 a sub-step on the demo's 2,500 particles, 60 at 10,000). The README's "The
@@ -130,8 +130,9 @@ pub struct DfsphSettings {
     pub fixed_budget: bool,
     /// Start the density solve from a pressure solved on a coarse grid under the particles
     /// (a MAC grid of two spacings a cell, a ghost-fluid free surface,
-    /// multigrid-preconditioned conjugate gradients) wherever it is above the last sub-step's: the
-    /// smooth, fluid-wide part of the pressure (a column's weight), which local iterations
+    /// multigrid-preconditioned conjugate gradients) plus nine tenths of what the last
+    /// sub-step's pressure had above it (an excess the iterations leave fades): the smooth,
+    /// fluid-wide part of the pressure (a column's weight), which local iterations
     /// remove slowest, so that a fixed budget of a few iterations holds deep water up (4 + 1
     /// holds resting layers 25 to 100 particles deep, where without it they boil).
     pub grid_start: bool,

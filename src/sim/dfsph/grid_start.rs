@@ -1,9 +1,10 @@
 //! The density solve's start from a coarse grid ([`DfsphSettings::grid_start`]): the pressure
 //! that makes the predicted velocities divergence-free on a grid under the particles
 //! ([`grid_pressure`](crate::sim::grid_pressure)), read back at each particle as its starting
-//! stiffness `κ = p/ρ₀` where it is above the warm start. The grid carries the smooth, fluid-wide part of the pressure (a
-//! column's weight), which the local iterations remove slowest; the iterations that follow
-//! correct what the grid cannot see (under two cells, near the surface and in splashes).
+//! stiffness `κ = p/ρ₀`, plus most of what the warm start had above it. The grid carries the
+//! smooth, fluid-wide part of the pressure (a column's weight), which the local iterations remove
+//! slowest; the iterations that follow correct what the grid cannot see (under two cells, near
+//! the surface and in splashes).
 //!
 //! [`DfsphSettings::grid_start`]: crate::sim::config::DfsphSettings::grid_start
 
