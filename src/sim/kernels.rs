@@ -73,6 +73,20 @@ pub trait RadialKernel: Copy + Send + Sync + 'static {
     }
     /// [`derivative_over_r`](Self::derivative_over_r) on four lanes at once (`r > 0`).
     fn derivative_over_r_x4(&self, r: Vec4) -> Vec4;
+    /// The slope over `r` that pressure and viscosity push with: [`derivative_over_r`](Self::derivative_over_r)
+    /// beyond the distance where `|dW/dr|` peaks, and that peak's `|dW/dr|` held closer in
+    /// (Thomas & Couchman 1992). A kernel whose slope vanishes at `r = 0` otherwise pushes two
+    /// particles apart less the closer they come, so that compressed particles pair up and sit at
+    /// one point (the pairing instability). Kernels whose slope peaks at `r = 0` keep theirs.
+    #[inline]
+    fn push_slope(&self, r: f32) -> f32 {
+        self.derivative_over_r(r)
+    }
+    /// [`push_slope`](Self::push_slope) on four lanes at once (`r > 0`).
+    #[inline]
+    fn push_slope_x4(&self, r: Vec4) -> Vec4 {
+        self.derivative_over_r_x4(r)
+    }
 }
 
 /// Müller et al. (2003) poly6 kernel, 2D: `W = 4/(πH⁸) (H² − r²)³`. Used for density.
@@ -317,6 +331,14 @@ impl RadialKernel for WendlandC2 {
         let t = (Vec4::ONE - r * self.inv_support).max(Vec4::ZERO);
         (-20.0 * self.norm * self.inv_support * self.inv_support) * t * t * t
     }
+    #[inline]
+    fn push_slope(&self, r: f32) -> f32 {
+        held_slope(self, 0.25 * self.support, r)
+    }
+    #[inline]
+    fn push_slope_x4(&self, r: Vec4) -> Vec4 {
+        held_slope_x4(self, 0.25 * self.support, r)
+    }
 }
 
 /// Cubic B-spline kernel (Monaghan & Lattanzio 1985), 2D, written with support radius `H = 2h`:
@@ -408,6 +430,36 @@ impl RadialKernel for CubicSpline {
         let near = c * (Vec4::splat(-3.0) + 2.25 * s);
         Vec4::select(s.cmplt(Vec4::ONE), near, far)
     }
+    #[inline]
+    fn push_slope(&self, r: f32) -> f32 {
+        held_slope(self, self.support / 3.0, r)
+    }
+    #[inline]
+    fn push_slope_x4(&self, r: Vec4) -> Vec4 {
+        held_slope_x4(self, self.support / 3.0, r)
+    }
+}
+
+/// [`RadialKernel::push_slope`] of a kernel whose `|dW/dr|` peaks at `peak` (m): the slope over
+/// `r` of `dW/dr` held at its peak inside it.
+#[inline]
+fn held_slope<K: RadialKernel>(kernel: &K, peak: f32, r: f32) -> f32 {
+    if r < peak {
+        kernel.derivative(peak) / r
+    } else {
+        kernel.derivative_over_r(r)
+    }
+}
+
+/// [`held_slope`] on four lanes at once.
+#[inline]
+fn held_slope_x4<K: RadialKernel>(kernel: &K, peak: f32, r: Vec4) -> Vec4 {
+    let held = Vec4::splat(kernel.derivative(peak)) / r;
+    Vec4::select(
+        r.cmplt(Vec4::splat(peak)),
+        held,
+        kernel.derivative_over_r_x4(r),
+    )
 }
 
 /// Sum of `W(|(i, j)| · spacing)` over an infinite square lattice of the given spacing: the
@@ -561,7 +613,13 @@ mod tests {
                 let lanes = Vec4::new(chunk[0], chunk[1], chunk[0] * 0.5, chunk[1] * 0.25);
                 let values = k.value_sq_x4(lanes * lanes).to_array();
                 let slopes = k.derivative_over_r_x4(lanes).to_array();
+                let pushes = k.push_slope_x4(lanes).to_array();
                 for (lane, &r) in lanes.to_array().iter().enumerate() {
+                    let want = k.push_slope(r);
+                    assert!(
+                        (pushes[lane] - want).abs() <= 1e-4 * want.abs().max(1.0),
+                        "{name}: push slope({r})"
+                    );
                     let want = k.value_sq(r * r);
                     assert!(
                         (values[lane] - want).abs() <= 1e-5 * want.abs().max(1.0),
@@ -579,6 +637,41 @@ mod tests {
             k.value_sq_x4(Vec4::splat(f32::INFINITY)),
             Vec4::ZERO,
             "{name}: W(∞)"
+        );
+    }
+
+    #[test]
+    fn the_push_holds_the_peak_slope_inside_it() {
+        fn check<K: RadialKernel>(name: &str, k: K, peak: f32) {
+            let held = k.derivative(peak);
+            assert!(
+                (k.derivative(peak * 0.99) - held) >= 0.0
+                    && (k.derivative(peak * 1.01) - held) >= 0.0,
+                "{name}: |W'| peaks at {peak}"
+            );
+            for f in [1e-4, 0.01, 0.3, 0.7, 0.999] {
+                let r = f * peak;
+                let push = k.push_slope(r) * r;
+                assert!(
+                    (push - held).abs() <= 1e-5 * held.abs(),
+                    "{name}: push at {r}"
+                );
+                assert!(
+                    push <= k.derivative(r),
+                    "{name}: push weaker than W' at {r}"
+                );
+            }
+            for f in [1.0, 1.01, 1.5, 3.0] {
+                let r = (f * peak).min(H);
+                assert_eq!(k.push_slope(r), k.derivative_over_r(r), "{name}: at {r}");
+            }
+        }
+        check("wendland", WendlandC2::new(H), 0.25 * H);
+        check("cubic", CubicSpline::new(H), H / 3.0);
+        let spiky = Spiky::new(H);
+        assert_eq!(
+            spiky.push_slope(0.01 * H),
+            spiky.derivative_over_r(0.01 * H)
         );
     }
 

@@ -126,7 +126,7 @@ impl PressureStages for Wcsph {
                 let d = &walls.data;
                 let v = Vec2::new(vx - d.vx[wall], vy - d.vy[wall]);
                 let viscous = laminar * r2 / ((r2 + eta_sq) * (rho_i + d.density[wall]));
-                let slope = g.derivative_over_r(r2.sqrt());
+                let slope = g.push_slope(r2.sqrt());
                 let pair = slope * (viscous * v - (term_i + d.pressure_term[wall]) * r);
                 let force = -c.mass * c.mass * pair;
                 sums[k].0 += force;
@@ -302,7 +302,7 @@ impl PairTerms {
         let r2 = r2.min(self.support_sq); // finite in masked lanes
         let (rx, ry) = (-dx, -dy); // rᵢⱼ = xᵢ − xⱼ
         let (vx, vy) = (self.vx - vx_j, self.vy - vy_j);
-        let slope = kernel.derivative_over_r_x4(r2.sqrt()); // ∇W = slope · r
+        let slope = kernel.push_slope_x4(r2.sqrt()); // ∇W = slope · r
         let inv = Vec4::ONE / ((r2 + self.eta_sq) * (self.rho + rho_j));
         let approach = (vx * rx + vy * ry).min(Vec4::ZERO);
         let scalar = self.own_term + term_j - self.artificial * approach * inv;

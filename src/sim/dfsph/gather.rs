@@ -189,7 +189,7 @@ fn fluid_row<W: RadialKernel, G: RadialKernel, K: Fn(usize) -> f32>(
         if mask == 0 {
             return;
         }
-        let slope = g.derivative_over_r_x4(r.min(t.support));
+        let slope = g.push_slope_x4(r.min(t.support));
         // ∇ᵢWᵢⱼ = slope (xᵢ − xⱼ) = −slope (dx, dy); zero on lanes outside.
         let scale = Vec4::select(inside, -t.scaled_volume * slope, Vec4::ZERO);
         let (gx, gy) = (scale * dx, scale * dy);
@@ -240,7 +240,7 @@ fn wall_sums<W: RadialKernel, G: RadialKernel>(
             return;
         }
         let r2 = r2.min(t.support_sq);
-        let slope = g.derivative_over_r_x4(r.min(t.support));
+        let slope = g.push_slope_x4(r.min(t.support));
         let gx = (-t.scaled_volume * slope * dx).to_array();
         let gy = (-t.scaled_volume * slope * dy).to_array();
         let friction = (t.volume * slope * r2 / (r2 + Vec4::splat(t.eta_sq))).to_array();

@@ -29,7 +29,7 @@ impl Dfsph {
         with_kernels!(c.kernel, c.support, |_w, g| {
             walls.for_each_solid_pair(c, fluid, |k, x, wall, i, r, r2| {
                 // r = xᵢ − x_b; the gather's `g_ib = −s V slope (x_b − xᵢ)`.
-                let slope = g.derivative_over_r(r2.sqrt());
+                let slope = g.push_slope(r2.sqrt());
                 let pair = Pair {
                     gradient: scaled_volume * slope * r,
                     friction: c.volume * slope * r2 / (r2 + eta_sq),
