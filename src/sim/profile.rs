@@ -16,9 +16,11 @@ pub enum SubstepPart {
     /// The non-pressure forces (WCSPH: every force) and their copy into the particles.
     Forces,
     /// The start of the density solve (DFSPH): the velocities predicted under every
-    /// acceleration and, with the grid start, the pressure on the coarse grid read back at the
-    /// particles.
+    /// acceleration.
     PressureStart,
+    /// With the grid start (DFSPH), the pressure on the coarse grid: the particles spread onto
+    /// it, its solve, and its pressure read back at the particles as the density solve's start.
+    GridPressure,
     /// The density solve under every acceleration (DFSPH).
     DensitySolve,
     /// The step length, the move of every particle and the solids' impulses.
@@ -27,12 +29,13 @@ pub enum SubstepPart {
 
 impl SubstepPart {
     /// Every part, in the order of a sub-step.
-    pub const ALL: [SubstepPart; 7] = [
+    pub const ALL: [SubstepPart; 8] = [
         Self::Neighbors,
         Self::Density,
         Self::DivergenceSolve,
         Self::Forces,
         Self::PressureStart,
+        Self::GridPressure,
         Self::DensitySolve,
         Self::Integrate,
     ];
@@ -45,6 +48,7 @@ impl SubstepPart {
             Self::DivergenceSolve => "divergence_solve",
             Self::Forces => "forces",
             Self::PressureStart => "pressure_start",
+            Self::GridPressure => "grid_pressure",
             Self::DensitySolve => "density_solve",
             Self::Integrate => "integrate",
         }

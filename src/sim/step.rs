@@ -198,8 +198,8 @@ pub trait PressureStages {
     fn step_limit(&self, s: &Shared, max_acceleration: f32) -> f32;
 
     /// [`Stage::Integrate`] after the step `dt` is chosen, before
-    /// [`solve_pressure`](Self::solve_pressure): what the solve starts from (DFSPH's predicted
-    /// velocities and grid pressure); nothing by default.
+    /// [`grid_pressure`](Self::grid_pressure): what the solve starts from (DFSPH's predicted
+    /// velocities); nothing by default.
     fn start_pressure(
         &mut self,
         _s: &mut Shared,
@@ -209,7 +209,11 @@ pub trait PressureStages {
     ) {
     }
 
-    /// [`Stage::Integrate`] after [`start_pressure`](Self::start_pressure), before the move: a
+    /// [`Stage::Integrate`] after [`start_pressure`](Self::start_pressure): the pressure the
+    /// solve starts from where the settings ask for one (DFSPH's coarse grid); none by default.
+    fn grid_pressure(&mut self, _s: &mut Shared, _dt: f32, _parallel: &impl Parallel) {}
+
+    /// [`Stage::Integrate`] after [`grid_pressure`](Self::grid_pressure), before the move: a
     /// pressure solve under every particle's acceleration (DFSPH's density solve); none by
     /// default.
     fn solve_pressure(
@@ -502,6 +506,11 @@ impl FluidStep {
                     let s = &mut step.shared;
                     with_solver!(&mut step.solver, |solver| solver
                         .start_pressure(s, particles, dt, parallel))
+                });
+                self.timed(SubstepPart::GridPressure, |step| {
+                    let s = &mut step.shared;
+                    with_solver!(&mut step.solver, |solver| solver
+                        .grid_pressure(s, dt, parallel))
                 });
                 self.timed(SubstepPart::DensitySolve, |step| {
                     let s = &mut step.shared;

@@ -64,17 +64,21 @@ impl PressureStages for Dfsph {
     }
 
     /// Step 4, its start: the velocities predicted under every particle's acceleration
-    /// (external forces included), and the grid pressure if the settings ask for it.
+    /// (external forces included).
     fn start_pressure(
         &mut self,
         s: &mut Shared,
         particles: &Particles,
         dt: f32,
-        parallel: &impl Parallel,
+        _parallel: &impl Parallel,
     ) {
-        let c = s.constants;
         let (order, acceleration) = (s.snapshot.grid().order(), &particles.acceleration);
         self.predicted_acceleration = self.predict(dt, |slot| acceleration[order[slot] as usize]);
+    }
+
+    /// Step 4, its start from the grid pressure, if the settings ask for it.
+    fn grid_pressure(&mut self, s: &mut Shared, dt: f32, parallel: &impl Parallel) {
+        let c = s.constants;
         self.report.grid_iterations = 0;
         if c.dfsph.grid_start && !self.is_empty() && dt > 0.0 {
             let first_of_tick = s.clock.substeps == 1;

@@ -89,6 +89,49 @@ impl Laplacian {
         n.map_or(CellKind::Solid, |n| self.kind[n])
     }
 
+    /// Makes air of every fluid cell with no path through fluid cells to an air cell, and
+    /// returns how many there were. A pocket sealed by walls and solids (water under a body
+    /// lying on the floor, a lone cell in a corner) has no pressure level of its own: its
+    /// equations are singular, and the conjugate gradients diverged on one (to 10¹⁹ Pa in the
+    /// soak). The grid leaves such a pocket to the particles' own solve. `reached` and `stack`
+    /// are scratch.
+    pub fn open_sealed_pockets(
+        &mut self,
+        reached: &mut Vec<bool>,
+        stack: &mut Vec<usize>,
+    ) -> usize {
+        reached.clear();
+        reached.resize(self.len(), false);
+        stack.clear();
+        for (c, reached) in reached.iter_mut().enumerate() {
+            let open = || {
+                self.neighbors(c)
+                    .iter()
+                    .any(|&n| self.kind_of(n) == CellKind::Air)
+            };
+            if self.is_fluid(c) && open() {
+                *reached = true;
+                stack.push(c);
+            }
+        }
+        while let Some(c) = stack.pop() {
+            for n in self.neighbors(c).into_iter().flatten() {
+                if self.is_fluid(n) && !reached[n] {
+                    reached[n] = true;
+                    stack.push(n);
+                }
+            }
+        }
+        let mut opened = 0;
+        for (kind, &reached) in self.kind.iter_mut().zip(reached.iter()) {
+            if *kind == CellKind::Fluid && !reached {
+                *kind = CellKind::Air;
+                opened += 1;
+            }
+        }
+        opened
+    }
+
     /// Whether cell `c` is an unknown.
     #[inline]
     pub fn is_fluid(&self, c: usize) -> bool {

@@ -139,6 +139,8 @@ pub struct GridPressure {
     previous: (IVec2, usize, Vec<f64>),
     multigrid: Multigrid,
     pcg: Pcg,
+    /// Scratch of [`Laplacian::open_sealed_pockets`].
+    pockets: (Vec<bool>, Vec<usize>),
     /// `ρ₀ g`, Pa/m.
     weight: Vec2,
     report: GridReport,
@@ -191,6 +193,11 @@ impl GridPressure {
             ),
             parallel,
         );
+        if result.relative_residual.is_nan() || result.relative_residual > 1.0 {
+            // Diverged (the equations are singular only in a sealed pocket, which `assemble`
+            // opens; this is the net under it): no pressure rather than a wrong one.
+            self.pressure.fill(0.0);
+        }
         self.extend(parallel);
         self.previous.0 = self.first;
         self.previous.1 = self.equations.nx;
@@ -382,10 +389,12 @@ impl GridPressure {
         }
     }
 
-    /// Step 4's equations: each fluid cell's diagonal (its free-surface fractions) and its
-    /// right-hand side `−(ρ₀/dt) ∇·u`.
+    /// Step 4's equations: sealed pockets opened, each fluid cell's diagonal (its free-surface
+    /// fractions) and its right-hand side `−(ρ₀/dt) ∇·u`.
     fn assemble(&mut self, input: &GridInput) {
         let e = &mut self.equations;
+        let (reached, stack) = &mut self.pockets;
+        e.open_sealed_pockets(reached, stack);
         let cells = e.len();
         self.rhs.clear();
         self.rhs.resize(cells, 0.0);

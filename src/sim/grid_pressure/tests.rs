@@ -239,6 +239,45 @@ fn the_disc_s_velocity_is_felt_by_the_pressure() {
     assert!(moving.pressure_at(below) < still.pressure_at(below) - 50.0);
 }
 
+#[test]
+fn a_pocket_sealed_by_a_solid_is_left_to_the_particles() {
+    // Water everywhere in the tank, and a solid arch on the floor rising off the water it
+    // traps: the pocket's equations have no solution (no face lets water in).
+    let centre = Vec2::new(0.2, 0.0);
+    let arch = move |x: Vec2| {
+        let r = x.distance(centre);
+        (0.05..0.1).contains(&r).then_some(Vec2::new(0.0, 0.005))
+    };
+    let positions: Vec<Vec2> = block(0.0, 0.4, 0.3)
+        .into_iter()
+        .filter(|&x| arch(x).is_none())
+        .collect();
+    let velocities = fallen(&positions);
+    let mut grid = GridPressure::new(GridPressureSettings::default());
+    let report = grid.solve(
+        &input(&positions, &velocities, Tank::new(0.4, 0.5)),
+        arch,
+        &Sequential,
+    );
+    assert!(report.relative_residual <= 1e-6, "{report:?}");
+    let pocket = centre + Vec2::new(0.0, 0.02);
+    assert_eq!(grid.kind_at(pocket), CellKind::Air, "the pocket is open");
+    assert_eq!(grid.pressure_at(pocket), 0.0);
+    // The water round the arch keeps its weight.
+    for x in [
+        Vec2::new(0.03, 0.05),
+        Vec2::new(0.37, 0.15),
+        Vec2::new(0.2, 0.25),
+    ] {
+        let expected = RHO * G * (0.3 - x.y);
+        let p = grid.pressure_at(x);
+        assert!(
+            p.is_finite() && (p - expected).abs() <= 0.1 * expected + RHO * G * SPACING,
+            "{p} Pa at {x}, {expected} expected"
+        );
+    }
+}
+
 /// The equations of an `n` × `n` box: solid walls a cell thick, the lower three fifths fluid,
 /// air above.
 fn tank_equations(n: usize) -> Laplacian {
