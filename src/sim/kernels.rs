@@ -271,15 +271,21 @@ pub struct WendlandC2 {
     support: f32,
     inv_support: f32,
     norm: f32,
+    peak: Peak,
 }
 
 impl WendlandC2 {
     /// The kernel with support radius `support` (m).
     pub fn new(support: f32) -> Self {
-        Self {
+        let kernel = Self {
             support,
             inv_support: 1.0 / support,
             norm: 7.0 / (PI * support * support),
+            peak: Peak::default(),
+        };
+        Self {
+            peak: Peak::of(&kernel, 0.25 * support),
+            ..kernel
         }
     }
 }
@@ -333,11 +339,11 @@ impl RadialKernel for WendlandC2 {
     }
     #[inline]
     fn push_slope(&self, r: f32) -> f32 {
-        held_slope(self, 0.25 * self.support, r)
+        self.peak.hold(r, self.derivative_over_r(r))
     }
     #[inline]
     fn push_slope_x4(&self, r: Vec4) -> Vec4 {
-        held_slope_x4(self, 0.25 * self.support, r)
+        self.peak.hold_x4(r, self.derivative_over_r_x4(r))
     }
 }
 
@@ -348,16 +354,22 @@ pub struct CubicSpline {
     support: f32,
     inv_h: f32,
     norm: f32,
+    peak: Peak,
 }
 
 impl CubicSpline {
     /// The kernel with support radius `support` (m); its smoothing length is half of it.
     pub fn new(support: f32) -> Self {
         let h = 0.5 * support;
-        Self {
+        let kernel = Self {
             support,
             inv_h: 1.0 / h,
             norm: 10.0 / (7.0 * PI * h * h),
+            peak: Peak::default(),
+        };
+        Self {
+            peak: Peak::of(&kernel, support / 3.0),
+            ..kernel
         }
     }
 }
@@ -432,34 +444,43 @@ impl RadialKernel for CubicSpline {
     }
     #[inline]
     fn push_slope(&self, r: f32) -> f32 {
-        held_slope(self, self.support / 3.0, r)
+        self.peak.hold(r, self.derivative_over_r(r))
     }
     #[inline]
     fn push_slope_x4(&self, r: Vec4) -> Vec4 {
-        held_slope_x4(self, self.support / 3.0, r)
+        self.peak.hold_x4(r, self.derivative_over_r_x4(r))
     }
 }
 
-/// [`RadialKernel::push_slope`] of a kernel whose `|dW/dr|` peaks at `peak` (m): the slope over
-/// `r` of `dW/dr` held at its peak inside it.
-#[inline]
-fn held_slope<K: RadialKernel>(kernel: &K, peak: f32, r: f32) -> f32 {
-    if r < peak {
-        kernel.derivative(peak) / r
-    } else {
-        kernel.derivative_over_r(r)
-    }
+/// Where a kernel's `|dW/dr|` peaks, m, and `dW/dr` there, 1/m³: what
+/// [`RadialKernel::push_slope`] holds inside the peak.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+struct Peak {
+    at: f32,
+    slope: f32,
 }
 
-/// [`held_slope`] on four lanes at once.
-#[inline]
-fn held_slope_x4<K: RadialKernel>(kernel: &K, peak: f32, r: Vec4) -> Vec4 {
-    let held = Vec4::splat(kernel.derivative(peak)) / r;
-    Vec4::select(
-        r.cmplt(Vec4::splat(peak)),
-        held,
-        kernel.derivative_over_r_x4(r),
-    )
+impl Peak {
+    /// The peak of `kernel` at `at`.
+    fn of<K: RadialKernel>(kernel: &K, at: f32) -> Self {
+        Self {
+            at,
+            slope: kernel.derivative(at),
+        }
+    }
+
+    /// The push slope over `r` at `r`, given the kernel's own `dW/dr / r` there (`slope`).
+    #[inline]
+    fn hold(self, r: f32, slope: f32) -> f32 {
+        if r < self.at { self.slope / r } else { slope }
+    }
+
+    /// [`hold`](Self::hold) on four lanes at once.
+    #[inline]
+    fn hold_x4(self, r: Vec4, slope: Vec4) -> Vec4 {
+        let held = Vec4::splat(self.slope) / r;
+        Vec4::select(r.cmplt(Vec4::splat(self.at)), held, slope)
+    }
 }
 
 /// Sum of `W(|(i, j)| · spacing)` over an infinite square lattice of the given spacing: the
