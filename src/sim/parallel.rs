@@ -8,6 +8,10 @@
 pub(crate) trait Parallel: Sync {
     /// Calls `work` once for every item, in any order, possibly on several threads.
     fn for_each<T: Send, F: Fn(&mut T) + Sync>(&self, items: &mut [T], work: F);
+
+    /// Whether everything runs on the calling thread, known when compiling: the slot passes
+    /// then fold their chunks in place, with no list of jobs to hand out.
+    const HERE: bool = false;
 }
 
 /// Runs everything on the calling thread.
@@ -15,6 +19,8 @@ pub(crate) trait Parallel: Sync {
 pub(crate) struct Sequential;
 
 impl Parallel for Sequential {
+    const HERE: bool = true;
+
     fn for_each<T: Send, F: Fn(&mut T) + Sync>(&self, items: &mut [T], work: F) {
         items.iter_mut().for_each(work);
     }
@@ -76,12 +82,20 @@ pub(crate) fn for_each_slot<T: Send>(
 /// Runs `work(slot, &mut out[slot])` for every slot, in parallel chunks of [`CHUNK`] slots, and
 /// folds what it returns with `add` from `R::default()`: slot by slot within a chunk, then chunk
 /// by chunk in slot order, so the result is the same on any number of threads.
-pub(crate) fn fold_slots<T: Send, R: Copy + Default + Send>(
+pub(crate) fn fold_slots<T: Send, R: Copy + Default + Send, P: Parallel>(
     out: &mut [T],
-    parallel: &impl Parallel,
+    parallel: &P,
     work: impl Fn(usize, &mut T) -> R + Sync,
     add: impl Fn(R, R) -> R + Sync,
 ) -> R {
+    if P::HERE {
+        let chunks = out.chunks_mut(CHUNK).enumerate();
+        return chunks.fold(R::default(), |total, (k, values)| {
+            let slots = values.iter_mut().enumerate();
+            let chunk = slots.fold(R::default(), |sum, (i, v)| add(sum, work(k * CHUNK + i, v)));
+            add(total, chunk)
+        });
+    }
     let n = out.len();
     let mut jobs: Vec<_> = out
         .chunks_mut(CHUNK)

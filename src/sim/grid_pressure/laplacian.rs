@@ -61,7 +61,12 @@ impl Laplacian {
     /// The four neighbours of cell `c` (left, right, down, up), `None` outside the rectangle.
     #[inline]
     pub fn neighbors(&self, c: usize) -> [Option<usize>; 4] {
-        let (i, j) = (c % self.nx, c / self.nx);
+        self.neighbors_at(c, (c % self.nx, c / self.nx))
+    }
+
+    /// [`neighbors`](Self::neighbors) of cell `c` at column `i`, row `j` (no division).
+    #[inline]
+    pub fn neighbors_at(&self, c: usize, (i, j): (usize, usize)) -> [Option<usize>; 4] {
         [
             (i > 0).then(|| c - 1),
             (i + 1 < self.nx).then(|| c + 1),
@@ -70,10 +75,10 @@ impl Laplacian {
         ]
     }
 
-    /// The four diagonal neighbours of cell `c`, `None` outside the rectangle.
+    /// The four diagonal neighbours of cell `c` at column `i`, row `j`, `None` outside the
+    /// rectangle.
     #[inline]
-    pub fn diagonals(&self, c: usize) -> [Option<usize>; 4] {
-        let (i, j) = (c % self.nx, c / self.nx);
+    pub fn diagonals_at(&self, c: usize, (i, j): (usize, usize)) -> [Option<usize>; 4] {
         let (left, right, down, up) = (i > 0, i + 1 < self.nx, j > 0, j + 1 < self.ny);
         [
             (left && down).then(|| c - self.nx - 1),

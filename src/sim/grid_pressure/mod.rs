@@ -39,7 +39,7 @@ mod splat;
 pub use laplacian::CellKind;
 
 use super::boundary::Tank;
-use super::parallel::{Parallel, for_each_slot};
+use super::parallel::Parallel;
 use bevy::math::{IVec2, Vec2};
 use laplacian::Laplacian;
 use multigrid::Multigrid;
@@ -139,8 +139,8 @@ pub struct GridPressure {
     previous: (IVec2, usize, Vec<f64>),
     multigrid: Multigrid,
     pcg: Pcg,
-    /// Scratch of [`Laplacian::open_sealed_pockets`].
-    pockets: (Vec<bool>, Vec<usize>),
+    /// Scratch of the cell passes: a flag per cell and a list of cells.
+    scratch: (Vec<bool>, Vec<usize>),
     /// `ρ₀ g`, Pa/m.
     weight: Vec2,
     report: GridReport,
@@ -198,7 +198,7 @@ impl GridPressure {
             // opens; this is the net under it): no pressure rather than a wrong one.
             self.pressure.fill(0.0);
         }
-        self.extend(parallel);
+        self.extend();
         self.previous.0 = self.first;
         self.previous.1 = self.equations.nx;
         self.previous.2.clone_from(&self.pressure);
@@ -393,7 +393,7 @@ impl GridPressure {
     /// fractions) and its right-hand side `−(ρ₀/dt) ∇·u`.
     fn assemble(&mut self, input: &GridInput) {
         let e = &mut self.equations;
-        let (reached, stack) = &mut self.pockets;
+        let (reached, stack) = &mut self.scratch;
         e.open_sealed_pockets(reached, stack);
         let cells = e.len();
         self.rhs.clear();
@@ -439,32 +439,47 @@ impl GridPressure {
         }));
     }
 
-    /// Step 5: the pressure extended past the fluid, for reading back.
-    fn extend(&mut self, parallel: &impl Parallel) {
-        let cells = self.equations.len();
+    /// Step 5: the pressure extended past the fluid, for reading back: the fluid cells' own,
+    /// and the cells next to them (side by side or corner to corner; farther ones read zero).
+    fn extend(&mut self) {
         let mut extended = core::mem::take(&mut self.extended);
+        let (mut marked, mut border) = core::mem::take(&mut self.scratch);
+        let e = &self.equations;
         extended.clear();
-        extended.resize(cells, 0.0);
-        let this = &*self;
-        let e = &this.equations;
-        for_each_slot(&mut extended, parallel, |c, out| {
-            *out = match e.kind[c] {
-                CellKind::Fluid => this.pressure[c] as f32,
-                kind => {
-                    // A solid corner cell has no fluid face: it takes its diagonal neighbours'
-                    // (a particle in the tank's corner reads the floor's pressure, not zero).
-                    this.extend_from(c, kind, e.neighbors(c))
-                        .or_else(|| {
-                            (kind == CellKind::Solid)
-                                .then(|| this.extend_from(c, kind, e.diagonals(c)))
-                                .flatten()
-                        })
-                        .unwrap_or(0.0)
+        extended.resize(e.len(), 0.0);
+        marked.clear();
+        marked.resize(e.len(), false);
+        border.clear();
+        for &c in &e.cells {
+            let c = c as usize;
+            extended[c] = self.pressure[c] as f32;
+            let at = (c % e.nx, c / e.nx);
+            let around = e
+                .neighbors_at(c, at)
+                .into_iter()
+                .chain(e.diagonals_at(c, at));
+            for n in around.flatten() {
+                if !e.is_fluid(n) && !marked[n] {
+                    marked[n] = true;
+                    border.push(n);
                 }
-            };
-            0.0
-        });
+            }
+        }
+        for &c in border.iter() {
+            let (kind, at) = (e.kind[c], (c % e.nx, c / e.nx));
+            // A solid corner cell has no fluid face: it takes its diagonal neighbours' (a
+            // particle in the tank's corner reads the floor's pressure, not zero).
+            extended[c] = self
+                .extend_from(c, kind, e.neighbors_at(c, at))
+                .or_else(|| {
+                    (kind == CellKind::Solid)
+                        .then(|| self.extend_from(c, kind, e.diagonals_at(c, at)))
+                        .flatten()
+                })
+                .unwrap_or(0.0);
+        }
         self.extended = extended;
+        self.scratch = (marked, border);
     }
 }
 

@@ -185,26 +185,35 @@ impl Band {
                 a.x * b.y,
             ]
         };
-        for (&c, w) in cells.iter().zip(weights(h, h)) {
-            self.fill[c] += w * input.share;
-        }
+        // Side by side along a row, two cells (and their two faces' sums and weights) are
+        // added at once.
+        let [w00, w10, w01, w11] = weights(h, h).map(|w| w * input.share);
+        add_at(&mut self.fill, c, [w00, w10]);
+        add_at(&mut self.fill, c + nx, [w01, w11]);
         // Faces normal to x: columns at the lattice points, rows at the centres'.
         let u = cj * (nx + 1) + i;
-        let faces = [u, u + 1, u + nx + 1, u + nx + 2];
-        for (&f, w) in faces.iter().zip(weights(f, h)) {
-            let sum = &mut self.face_sums[0][f];
-            sum[0] += w * v.x;
-            sum[1] += w;
-        }
+        let sums = self.face_sums[0].as_flattened_mut();
+        let [w00, w10, w01, w11] = weights(f, h);
+        add_at(sums, 2 * u, [w00 * v.x, w00, w10 * v.x, w10]);
+        add_at(sums, 2 * (u + nx + 1), [w01 * v.x, w01, w11 * v.x, w11]);
         // Faces normal to y: columns at the centres', rows at the lattice points.
         let u = j * nx + ci;
-        let faces = [u, u + 1, u + nx, u + nx + 1];
-        for (&f, w) in faces.iter().zip(weights(h, f)) {
-            let sum = &mut self.face_sums[1][f];
-            sum[0] += w * v.y;
-            sum[1] += w;
-        }
+        let sums = self.face_sums[1].as_flattened_mut();
+        let [w00, w10, w01, w11] = weights(h, f);
+        add_at(sums, 2 * u, [w00 * v.y, w00, w10 * v.y, w10]);
+        add_at(sums, 2 * (u + nx), [w01 * v.y, w01, w11 * v.y, w11]);
         true
+    }
+}
+
+/// Adds `add` to the `N` values from `at` on.
+#[inline]
+fn add_at<const N: usize>(values: &mut [f32], at: usize, add: [f32; N]) {
+    let values: &mut [f32; N] = (&mut values[at..at + N])
+        .try_into()
+        .expect("a range of N values");
+    for (value, add) in values.iter_mut().zip(add) {
+        *value += add;
     }
 }
 
