@@ -20,6 +20,7 @@ use bevy_sph2d::fluid::{
 };
 use bevy_sph2d::gameplay::FluidBlock;
 use bevy_sph2d::gravity::GravityAcceleration;
+use bevy_sph2d::particle::{Mass, Position, Velocity};
 use bevy_sph2d::prelude::*;
 use clap::error::ErrorKind;
 use clap::{CommandFactory, Parser, ValueEnum};
@@ -479,7 +480,9 @@ mod float {
         });
         let world = app.world_mut();
         for &particle in fluid {
-            let x = world.get::<Position>(particle).map(|p| p.0);
+            let x = world
+                .get::<bevy_sph2d::particle::Position>(particle)
+                .map(|p| p.0);
             if let (Some(x), Some(solid)) = (x, &placed)
                 && solid.distance(x).0 < 0.5 * spacing
             {

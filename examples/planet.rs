@@ -52,6 +52,11 @@ fn respawn(
     }
     let mass = params.particle_mass();
     for (p, v) in FluidPlanets::default().particles(params.particle_spacing) {
-        commands.spawn((FluidParticle, Position(p), Velocity(v), Mass(mass)));
+        commands.spawn((
+            FluidParticle,
+            particle::Position(p),
+            particle::Velocity(v),
+            particle::Mass(mass),
+        ));
     }
 }

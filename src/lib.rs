@@ -68,7 +68,6 @@
 // Unsafe code only in the SIMD sums of the core (each block with its SAFETY note), which allow it.
 #![deny(unsafe_code)]
 
-mod body;
 mod compute;
 mod control;
 #[cfg(feature = "avian")]
@@ -83,13 +82,13 @@ pub mod interact;
 #[cfg(feature = "egui")]
 pub mod panel;
 mod params;
+pub mod particle;
 #[cfg(feature = "render")]
 pub mod render;
 mod schedule;
 mod sim;
 pub mod validation;
 
-pub use body::{Position, Velocity};
 pub use control::{
     ResetSimulation, SimulationControl, SimulationControlPlugin, SimulationControlSystems,
     simulation_running,
@@ -142,10 +141,10 @@ pub fn task_pool_plugin(compute_threads: usize) -> TaskPoolPlugin {
 /// The simulation plugins of the crate, all stepping in one schedule ([`FixedUpdate`] by
 /// default, or the one given to [`new`](Self::new)) under the crate-wide
 /// [`ParticleSystems`]: they run headless (with `MinimalPlugins`) as
-/// well as in a game. Configure one with `.set(SphPlugin::default().with_fixed_hz(120.0))` (it
-/// still steps in the group's schedule: the first
-/// [`ParticleSchedulePlugin`] added owns the schedule for every plugin) or leave one out with
-/// `.disable::<SphPlugin>()`. For sprites, mouse tools and the panel add `ParticleUiPlugins`
+/// well as in a game. Configure one with `.set(SphPlugin::default().with_params(params))` (it
+/// still steps in the group's schedule: the first [`ParticleSchedulePlugin`] added owns the
+/// schedule for every plugin) or leave one out with `.disable::<SphPlugin>()`. The fixed step's
+/// rate is the app's `Time<Fixed>`, which the crate never sets. For sprites, mouse tools and the panel add `ParticleUiPlugins`
 /// after this group: they step in its schedule too.
 ///
 /// [`FixedUpdate`]: bevy::prelude::FixedUpdate
@@ -213,7 +212,6 @@ pub mod prelude {
     pub use crate::ParticlePlugins;
     #[cfg(feature = "render")]
     pub use crate::ParticleUiPlugins;
-    pub use crate::body::{Position, Velocity};
     pub use crate::control::{ResetSimulation, SimulationControl};
     #[cfg(feature = "avian")]
     pub use crate::coupling::{FluidCoupled, FluidCouplingPlugin};
@@ -228,13 +226,14 @@ pub mod prelude {
     };
     pub use crate::gravity::{
         FluidPlanets, GalaxyDisc, GravityAcceleration, GravityParams, GravityPlugin, GravityStats,
-        GravitySystems, Mass, Multipole,
+        GravitySystems, Multipole,
     };
     #[cfg(feature = "render")]
     pub use crate::interact::{ParticleInteractPlugin, PointerSettings, PointerTool};
     #[cfg(feature = "egui")]
     pub use crate::panel::ParticlePanelPlugin;
     pub use crate::params::ParamTable;
+    pub use crate::particle;
     #[cfg(feature = "render")]
     pub use crate::render::{
         ColorMap, LiquidStyle, ParticleCamera, ParticleDraw, ParticleRenderPlugin, ParticleView,

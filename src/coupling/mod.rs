@@ -17,14 +17,13 @@
 mod pointer;
 
 use crate::fluid::{
-    FluidForce, Part, Solid, SolidShape, SolidVelocity, SphParams, SphSystems, Tank,
+    FluidForce, Part, Solid, SolidShape, SolidVelocity, SphParams, SphPlugin, SphSystems, Tank,
     coupled_acceleration,
 };
-use crate::schedule::{ParticleSchedulePlugin, ParticleSystems};
+use crate::schedule::{ParticleSchedule, ParticleSystems};
 use avian2d::parry::shape::TypedShape;
 use avian2d::prelude as avian;
 use avian2d::prelude::WriteRigidBodyForces;
-use bevy::ecs::schedule::ScheduleLabel;
 use bevy::prelude::*;
 
 /// Couples avian2d bodies marked [`FluidCoupled`] with the fluid (see the module docs). Add it
@@ -54,8 +53,20 @@ pub const MAX_FLUID_ACCELERATION: f32 = 98.1;
 
 impl Plugin for FluidCouplingPlugin {
     fn build(&self, app: &mut App) {
-        let schedule = ParticleSchedulePlugin::ensure(app, FixedUpdate.intern());
-        app.register_type::<FluidCoupled>().add_systems(
+        app.register_type::<FluidCoupled>();
+    }
+
+    /// The systems go in once every plugin is built, into the schedule the fluid steps in,
+    /// whichever order the plugins came in.
+    fn finish(&self, app: &mut App) {
+        if !app.is_plugin_added::<SphPlugin>() {
+            error!(
+                "FluidCouplingPlugin: no fluid to couple with; add ParticlePlugins (or SphPlugin)"
+            );
+            return;
+        }
+        let schedule = ParticleSchedule::of(app);
+        app.add_systems(
             schedule,
             (
                 (tank_walls, attach_solids, copy_velocities)

@@ -31,7 +31,7 @@ use bevy::prelude::*;
 )]
 pub struct FluidParticle;
 
-pub use crate::body::{Position, Velocity};
+pub use crate::particle::{Position, Velocity};
 
 /// Acceleration of the last sub-step, m/s²: what
 /// [`SphSubstepSystems::Forces`](crate::fluid::SphSubstepSystems::Forces) computes (WCSPH:

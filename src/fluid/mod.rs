@@ -103,8 +103,6 @@ pub struct SphPlugin {
     pub schedule: Interned<dyn ScheduleLabel>,
     /// Parameters inserted at start-up.
     pub params: SphParams,
-    /// Fixed-step rate to set, Hz (`None` keeps the app's `Time<Fixed>`).
-    pub fixed_hz: Option<f64>,
 }
 
 impl Default for SphPlugin {
@@ -112,7 +110,6 @@ impl Default for SphPlugin {
         Self {
             schedule: FixedUpdate.intern(),
             params: SphParams::default(),
-            fixed_hz: None,
         }
     }
 }
@@ -132,12 +129,6 @@ impl SphPlugin {
         self.params = params;
         self
     }
-
-    /// Sets the app's fixed-step rate, Hz.
-    pub fn with_fixed_hz(mut self, hz: f64) -> Self {
-        self.fixed_hz = Some(hz);
-        self
-    }
 }
 
 /// The fluid's stages in the plugin's schedule, chained in this order.
@@ -155,9 +146,6 @@ impl Plugin for SphPlugin {
     fn build(&self, app: &mut App) {
         if let Err(error) = self.params.validate() {
             error!("SphPlugin: {error}; starting with SphParams::default() until it is fixed");
-        }
-        if let Some(hz) = self.fixed_hz {
-            app.insert_resource(Time::<Fixed>::from_hz(hz));
         }
         let schedule = ParticleSchedulePlugin::ensure(app, self.schedule);
         app.register_type::<SphParams>()

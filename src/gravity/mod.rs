@@ -4,9 +4,9 @@ mod params;
 mod scenario;
 mod systems;
 
-use crate::body::{Position, Velocity};
 use crate::control::simulation_running;
 use crate::fluid::SubstepHooks;
+use crate::particle::{Position, Velocity};
 use crate::schedule::{
     BodyForceSystems, ParticleSchedulePlugin, ParticleSystems, SphSubstep, SphSubstepSystems,
 };

@@ -3,10 +3,10 @@
 //! [`GravityPlugin`](crate::gravity::GravityPlugin).
 
 use super::{GravityParams, Mass};
-use crate::body::{Position, Velocity};
 use crate::control::ResetSimulation;
 use crate::fluid::{FluidParticle, SphParams};
 use crate::gameplay::FluidBlock;
+use crate::particle::{Position, Velocity};
 use bevy::prelude::*;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;

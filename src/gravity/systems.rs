@@ -5,8 +5,8 @@
 
 use super::params::{GravityParams, GravityParamsError};
 use super::{GravityAcceleration, GravityPotential, GravitySlot, Mass};
-use crate::body::{Position, Velocity};
 use crate::fluid::{Acceleration, FluidParticle};
+use crate::particle::{Position, Velocity};
 use crate::sim::gravity::quadtree::{Field, FieldQuery, QuadTree, direct_field_at};
 use bevy::platform::time::Instant;
 use bevy::prelude::*;

@@ -4,12 +4,12 @@
 
 mod tools;
 
-use crate::body::{Position, Velocity};
 use crate::control::{ResetSimulation, SimulationControl, simulation_running};
 use crate::fluid::SubstepHooks;
 use crate::fluid::{Acceleration, FluidParticle, SphParams, SphSubstep, SphSubstepSystems};
 use crate::gameplay::{EmitterRate, FluidEmitter, LoadSlot, SaveSlot};
 use crate::gravity::{GravityAcceleration, Mass};
+use crate::particle::{Position, Velocity};
 use crate::render::{ParticleCamera, ParticleDraw, ParticleView, cursor_to_world};
 use crate::schedule::{BodyForceSystems, ParticleSchedule, ParticleSystems};
 use bevy::input::mouse::AccumulatedMouseScroll;

@@ -2,9 +2,9 @@
 //! [`ParticleRenderPlugin`](crate::render::ParticleRenderPlugin).
 
 use super::{ColorMap, ColorRange, ColorTable, ParticleTexture, PreviousPosition};
-use crate::body::{Position, Velocity};
 use crate::fluid::FluidParticle;
 use crate::gravity::Mass;
+use crate::particle::{Position, Velocity};
 use bevy::prelude::*;
 
 /// What body sprites show.

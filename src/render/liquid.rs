@@ -14,8 +14,8 @@
 use super::{
     ParticleCamera, ParticleDraw, ParticleView, PreviousPosition, RenderMode, shown_value,
 };
-use crate::body::{Position, Velocity};
 use crate::fluid::{Density, FluidParticle, Pressure, SphParams};
+use crate::particle::{Position, Velocity};
 use bevy::asset::{AssetPath, RenderAssetUsages, embedded_asset, embedded_path};
 use bevy::camera::visibility::{NoFrustumCulling, RenderLayers};
 use bevy::camera::{CameraProjection, CompositingSpace, Hdr, RenderTarget, ScalingMode};

@@ -7,8 +7,8 @@ mod colormap;
 mod liquid;
 mod view;
 
-use crate::body::{Position, Velocity};
 use crate::fluid::{Density, FluidParticle, Obstacle, Pressure, Shape, SphParams};
+use crate::particle::{Position, Velocity};
 use crate::schedule::{ParticleSchedule, ParticleSystems};
 use bevy::asset::RenderAssetUsages;
 use bevy::prelude::*;

@@ -50,10 +50,13 @@ pub struct State {
 /// Every fluid particle's state, in query order.
 pub fn states(app: &mut App) -> Vec<State> {
     let world = app.world_mut();
-    let mut query = world.query_filtered::<
-        (&Position, &Velocity, &Acceleration, &Density, &Pressure),
-        With<FluidParticle>,
-    >();
+    let mut query = world.query_filtered::<(
+        &particle::Position,
+        &particle::Velocity,
+        &Acceleration,
+        &Density,
+        &Pressure,
+    ), With<FluidParticle>>();
     query
         .iter(world)
         .map(|(x, v, a, rho, p)| State {

@@ -17,3 +17,5 @@ mod schedule;
 mod soak;
 mod solids;
 mod sources_and_sensors;
+#[cfg(all(feature = "avian", feature = "render"))]
+mod with_avian;

@@ -73,11 +73,11 @@ fn particles_spawned_at_non_finite_positions_are_despawned() {
     spawn(&mut app, FluidBlock::dam_break(0.1, 0.1));
     let before = states(&mut app).len();
     app.world_mut()
-        .spawn((FluidParticle, Position(Vec2::new(f32::NAN, 0.1))));
+        .spawn((FluidParticle, particle::Position(Vec2::new(f32::NAN, 0.1))));
     app.world_mut().spawn((
         FluidParticle,
-        Position(Vec2::new(0.3, 0.1)),
-        Velocity(Vec2::new(0.0, f32::INFINITY)),
+        particle::Position(Vec2::new(0.3, 0.1)),
+        particle::Velocity(Vec2::new(0.0, f32::INFINITY)),
     ));
     run(&mut app, 2);
     let after = states(&mut app);
@@ -90,7 +90,7 @@ fn particles_spawned_outside_the_tank_are_brought_inside() {
     let mut app = create_app(params());
     spawn(&mut app, FluidBlock::dam_break(0.1, 0.1));
     app.world_mut()
-        .spawn((FluidParticle, Position(Vec2::new(5.0, -3.0))));
+        .spawn((FluidParticle, particle::Position(Vec2::new(5.0, -3.0))));
     run(&mut app, 2);
     for s in states(&mut app) {
         assert!(s.position.x >= 0.0 && s.position.x <= 0.6, "{}", s.position);

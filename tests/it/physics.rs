@@ -284,10 +284,10 @@ fn momentum(base: SphParams) {
     let centre = Vec2::new(0.0, 0.275);
     for (k, &entity) in ids.iter().enumerate() {
         let mut e = app.world_mut().entity_mut(entity);
-        let d = e.get::<Position>().unwrap().0 - centre;
+        let d = e.get::<particle::Position>().unwrap().0 - centre;
         let squeeze = Vec2::new(-d.x * 6.0, -d.y * 3.0 + d.x * 4.0);
         let wobble = Vec2::new((k as f32 * 0.37).sin(), (k as f32 * 0.71).cos()) * 0.05;
-        e.get_mut::<Velocity>().unwrap().0 = squeeze + wobble + Vec2::new(0.3, -0.1);
+        e.get_mut::<particle::Velocity>().unwrap().0 = squeeze + wobble + Vec2::new(0.3, -0.1);
     }
     let momentum = |app: &mut App| {
         states(app)

@@ -19,7 +19,7 @@ struct Stirring {
     strength: f32,
 }
 
-fn stir(stirring: Res<Stirring>, mut particles: Query<(&Position, &mut Acceleration)>) {
+fn stir(stirring: Res<Stirring>, mut particles: Query<(&particle::Position, &mut Acceleration)>) {
     for (position, mut acceleration) in &mut particles {
         let d = position.0 - stirring.centre;
         let falloff = (1.0 - d.length() / 0.15).max(0.0);
@@ -83,8 +83,11 @@ fn soak(base: SphParams) {
                         outside += 1;
                     }
                     let v = Vec2::new(rng.random_range(-5.0..5.0), rng.random_range(-5.0..5.0));
-                    app.world_mut()
-                        .spawn((FluidParticle, Position(p), Velocity(v)));
+                    app.world_mut().spawn((
+                        FluidParticle,
+                        particle::Position(p),
+                        particle::Velocity(v),
+                    ));
                 }
             }
             1 => {
