@@ -40,7 +40,7 @@ fn substep(c: &mut Criterion) {
         let n = positions.len() as u64;
         group.throughput(Throughput::Elements(n));
 
-        let mut fluid = SliceFluid::new(params.constants().unwrap(), positions, &[]);
+        let mut fluid = SliceFluid::new(params.constants().unwrap(), positions);
         group.bench_function(format!("slices/{n}/R{ratio}"), |b| b.iter(|| fluid.step()));
 
         // One sub-step per update: max_substeps = 1 and a tick longer than a stable step. As

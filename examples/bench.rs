@@ -234,7 +234,7 @@ fn main() {
         .build()
         .expect("rayon pool");
     let (slices_seconds, neighbours, slices_iterations) = pool.install(|| {
-        let mut fluid = SliceFluid::new(constants, positions.clone(), &[]);
+        let mut fluid = SliceFluid::new(constants, positions.clone());
         fluid.solids_mut().extend(solids);
         for _ in 0..WARM_UP {
             fluid.step();

@@ -18,7 +18,7 @@
 use bevy::prelude::*;
 use bevy::time::TimeUpdateStrategy;
 use bevy_sph2d::fluid::{
-    Acceleration, FluidParticle, Obstacle, Position, PressureSolver, SphParams, SphStats,
+    Acceleration, FluidParticle, Position, PressureSolver, Solid, SolidShape, SphParams, SphStats,
     SphSubstep, SphSubstepSystems,
 };
 use bevy_sph2d::gameplay::{
@@ -227,14 +227,21 @@ fn main() {
             // Obstacles appear and vanish.
             if rng.random_bool(0.3) {
                 if obstacles.len() < 3 && rng.random_bool(0.6) {
+                    // Still solids: a disc where it is put, or a segment in world coordinates.
                     let obstacle = if rng.random_bool(0.5) {
-                        Obstacle::circle(random_point(&mut rng, 0.1), rng.random_range(0.02..0.08))
+                        let radius = rng.random_range(0.02..0.08);
+                        let at = random_point(&mut rng, 0.1);
+                        (
+                            Solid::new(SolidShape::circle(radius)),
+                            Transform::from_translation(at.extend(0.0)),
+                        )
                     } else {
-                        Obstacle::segment(
+                        let shape = SolidShape::capsule(
                             random_point(&mut rng, 0.1),
                             random_point(&mut rng, 0.1),
                             rng.random_range(0.005..0.03),
-                        )
+                        );
+                        (Solid::new(shape), Transform::IDENTITY)
                     };
                     obstacles.push(world.spawn(obstacle).id());
                 } else if let Some(obstacle) = obstacles.pop() {

@@ -216,7 +216,7 @@ pub mod prelude {
     #[cfg(feature = "avian")]
     pub use crate::coupling::{FluidCoupled, FluidCouplingPlugin};
     pub use crate::fluid::{
-        Acceleration, Density, FluidForce, FluidParticle, KernelKind, Obstacle, Pressure, Solid,
+        Acceleration, Density, FluidForce, FluidParticle, KernelKind, Pressure, Solid,
         SolidEntered, SolidLeft, SolidShape, SolidVelocity, SphParams, SphParamsStatus, SphPlugin,
         SphStats, SphSystems, Submerged, Tank,
     };

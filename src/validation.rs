@@ -78,7 +78,7 @@ impl MartinMoyce {
         let params = self.params(base);
         let constants = params.constants().ok()?;
         let positions = self.block().positions_for(&params);
-        let mut fluid = SliceFluid::new(constants, positions, &[]);
+        let mut fluid = SliceFluid::new(constants, positions);
         let scale = self.time_scale();
         let mut history = Vec::new();
         while (fluid.clock().time as f32) * scale < Self::END {
@@ -196,7 +196,7 @@ impl RestingLayer {
         let params = self.params(base);
         let constants = params.constants().ok()?;
         let positions = self.block().positions_for(&params);
-        let fluid = SliceFluid::new(constants, positions, &[]);
+        let fluid = SliceFluid::new(constants, positions);
         let mut report = settle(fluid, duration, average, tick);
         report.particles_deep = self.particles_deep();
         Some(report)
@@ -239,7 +239,7 @@ impl DamBreakSettling {
         let tank = params.tank?;
         let constants = params.constants().ok()?;
         let block = FluidBlock::dam_break(0.3 * tank.width, 0.6 * tank.height).with_seed(7);
-        let fluid = SliceFluid::new(constants, block.positions_for(&params), &[]);
+        let fluid = SliceFluid::new(constants, block.positions_for(&params));
         Some(settle(fluid, duration, average, tick))
     }
 }
@@ -310,7 +310,7 @@ impl FloatingBox {
             .into_iter()
             .filter(clear)
             .collect();
-        let mut fluid = SliceFluid::new(c, positions, &[]);
+        let mut fluid = SliceFluid::new(c, positions);
         fluid.solids_mut().push(solid);
         let (w, h) = (self.size.x, self.size.y);
         let mass = self.relative_density * c.rest_density * w * h;

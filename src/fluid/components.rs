@@ -1,10 +1,9 @@
-//! Components of a fluid particle, and the [`Obstacle`] component. See
-//! [`SphPlugin`](crate::fluid::SphPlugin).
+//! Components of a fluid particle. See [`SphPlugin`](crate::fluid::SphPlugin); solids in the
+//! fluid, still or moving, are [`Solid`](crate::fluid::Solid)s.
 //!
 //! Spawning [`FluidParticle`] with a [`Position`] is enough: the marker requires the rest, and the
 //! solver fills in density, pressure and acceleration at the next step.
 
-use crate::sim::boundary::Shape;
 use bevy::prelude::*;
 
 /// Marks an entity as an SPH fluid particle. Its required components carry the state the solver
@@ -80,27 +79,5 @@ impl Default for FluidIndex {
             index: u32::MAX,
             generation: 0,
         }
-    }
-}
-
-/// A static solid obstacle inside the fluid. Spawn it as a component on any entity; the solver
-/// re-samples its boundary particles whenever obstacles are added, changed or removed.
-///
-/// Give obstacles a radius of at least one kernel support radius where possible: thinner ones
-/// cannot hold a full layer of boundary particles, so fluid near them sees a little less density
-/// (the collision projection still keeps it out).
-#[derive(Component, Reflect, Debug, Clone, Copy, Deref, DerefMut, PartialEq)]
-#[reflect(Component, Debug, PartialEq)]
-pub struct Obstacle(pub Shape);
-
-impl Obstacle {
-    /// A disc of `radius` (m) around `center`.
-    pub const fn circle(center: Vec2, radius: f32) -> Self {
-        Self(Shape::circle(center, radius))
-    }
-
-    /// A capsule of half thickness `radius` (m) around the segment from `start` to `end`.
-    pub const fn segment(start: Vec2, end: Vec2, radius: f32) -> Self {
-        Self(Shape::segment(start, end, radius))
     }
 }

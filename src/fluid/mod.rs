@@ -17,7 +17,7 @@ use crate::gameplay::FluidGameplayPlugin;
 use crate::schedule::{ParticleSchedulePlugin, ParticleSystems};
 
 pub use crate::schedule::{SphSubstep, SphSubstepSystems};
-pub use crate::sim::boundary::{Shape, Tank};
+pub use crate::sim::boundary::Tank;
 pub use crate::sim::clock::SubstepClock;
 pub use crate::sim::config::{DfsphSettings, PressureSolver, SphConstants};
 pub use crate::sim::dfsph::{DfsphReport, LARGEST_ERROR_RATIO, MAX_RELIEF_RATE, PRESSURE_ACCURACY};
@@ -33,15 +33,14 @@ pub use crate::sim::solid::{
 pub use crate::sim::step::WET_WEIGHT;
 pub use crate::sim::step::{Particles, SolverIterations};
 pub use crate::sim::world::SliceFluid;
-pub use components::{
-    Acceleration, Density, FluidParticle, Obstacle, Position, Pressure, Velocity,
-};
+pub use components::{Acceleration, Density, FluidParticle, Position, Pressure, Velocity};
 pub(crate) use components::{FluidIndex, Stiffness};
 pub(crate) use driver::SubstepHooks;
 pub use driver::refresh_fluid_state;
 pub(crate) use params::STANDARD_GRAVITY;
 pub use params::{SphParams, SphParamsError};
 pub use resources::{SphParamsStatus, SphSolver, SphStats};
+pub(crate) use solids::pose_of;
 pub use solids::{
     FluidForce, SOLID_ENTER_FRACTION, SOLID_LEAVE_FRACTION, Solid, SolidEntered, SolidLeft,
     SolidVelocity, Submerged,
@@ -54,7 +53,7 @@ pub(crate) use stats::update_stats;
 /// simulation core, whose one sub-step order the plain-vector [`SliceFluid`] drives too.
 ///
 /// Spawn [`FluidParticle`]s (or queue a [`FluidBlock`](crate::gameplay::FluidBlock)) and tune
-/// [`SphParams`]; read [`SphStats`]. Add [`Obstacle`] components for solids inside the tank.
+/// [`SphParams`]; read [`SphStats`]. Add [`Solid`]s (still or moving) inside the tank.
 /// It adds the [`FluidGameplayPlugin`] (emitters, drains, sensors, scenarios, save and restore).
 ///
 /// # Schedule
@@ -158,7 +157,6 @@ impl Plugin for SphPlugin {
             .register_type::<Pressure>()
             .register_type::<Stiffness>()
             .register_type::<FluidIndex>()
-            .register_type::<Obstacle>()
             .register_type::<Solid>()
             .register_type::<SolidVelocity>()
             .register_type::<FluidForce>()

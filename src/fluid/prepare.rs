@@ -1,10 +1,8 @@
 //! [`SphSystems::Prepare`](super::SphSystems::Prepare): the stability guard and the wall
 //! particles, before the tick's sub-steps.
 
-use super::components::{FluidParticle, Obstacle, Position, Velocity};
-use super::params::MAX_WALL_PARTICLES;
+use super::components::{FluidParticle, Position, Velocity};
 use super::resources::SphSolver;
-use crate::sim::boundary::Shape;
 use bevy::prelude::*;
 
 /// The stability guard, before each tick's sub-steps: despawns every particle whose position or
@@ -53,33 +51,10 @@ pub(crate) fn guard_particles(
     }
 }
 
-/// Re-samples the wall particles when the tank, spacing or obstacles change.
-pub(crate) fn rebuild_walls(
-    mut solver: ResMut<SphSolver>,
-    obstacles: Query<&Obstacle>,
-    changed: Query<(), Changed<Obstacle>>,
-    mut removed: RemovedComponents<Obstacle>,
-) {
-    let removed_any = removed.read().count() > 0;
-    if !(solver.walls_dirty || removed_any || !changed.is_empty()) {
-        return;
+/// Re-samples the tank's wall particles when the tank or the spacing changes.
+pub(crate) fn rebuild_walls(mut solver: ResMut<SphSolver>) {
+    if solver.walls_dirty {
+        solver.step.rebuild_walls();
+        solver.walls_dirty = false;
     }
-    let shapes: Vec<Shape> = obstacles.iter().map(|o| o.0).collect();
-    let (spacing, layers) = {
-        let c = solver.step.constants();
-        (c.spacing, c.wall_layers)
-    };
-    for shape in &shapes {
-        if !shape.is_valid() {
-            warn!("ignoring obstacle {shape:?}: coordinates must be finite and radii positive");
-        } else if !shape.fits(spacing, layers) {
-            warn!(
-                "ignoring obstacle {shape:?}: at {spacing} m spacing it needs {} boundary \
-                 particles (limit {MAX_WALL_PARTICLES}); make it smaller or the spacing coarser",
-                shape.sample_count(spacing, layers)
-            );
-        }
-    }
-    solver.step.rebuild_walls(&shapes);
-    solver.walls_dirty = false;
 }

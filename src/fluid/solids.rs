@@ -118,7 +118,7 @@ pub(crate) struct SolidIndex {
 }
 
 /// The pose of a solid's `Transform`.
-fn pose_of(transform: &Transform) -> Pose {
+pub(crate) fn pose_of(transform: &Transform) -> Pose {
     Pose {
         position: transform.translation.truncate(),
         angle: transform.rotation.to_euler(EulerRot::ZYX).0,

@@ -3,9 +3,9 @@
 //! [`SphSystems::Finish`](crate::fluid::SphSystems::Finish), before the statistics), with either
 //! solver. See [`SphPlugin`](crate::fluid::SphPlugin).
 
-use crate::fluid::Obstacle;
 use crate::fluid::SphParams;
 use crate::fluid::{FluidParticle, Position, Velocity};
+use crate::fluid::{Pose, Solid, pose_of};
 use crate::sim::region::FluidRegion;
 use bevy::prelude::*;
 
@@ -25,7 +25,7 @@ pub enum EmitterRate {
 /// headless apps without transform propagation work either way). Particles leave the nozzle in rows across its
 /// `width`, one particle spacing apart, at `speed` along `direction` (world space); a row is
 /// only as full as there is room: no particle is spawned within 0.8 spacings of another, inside
-/// an [`Obstacle`] or outside the tank. Start and stop it with `active`, or remove the component.
+/// a [`Solid`] or outside the tank. Start and stop it with `active`, or remove the component.
 ///
 /// ```
 /// # use bevy::prelude::*;
@@ -174,18 +174,18 @@ impl FluidDrain {
 }
 
 /// Where a new particle may go (the emitters' and the pour tool's one rule): a finite point
-/// inside the tank (if any) by half a spacing, half a spacing out of every obstacle, and not
-/// within `0.8 Δx` of `taken` (the particles nearby, see [`near`]).
-fn free_spot(p: Vec2, params: &SphParams, obstacles: &[Obstacle], taken: &[Vec2]) -> bool {
+/// inside the tank (if any) by half a spacing, half a spacing out of every solid (each with its
+/// pose), and not within `0.8 Δx` of `taken` (the particles nearby, see [`near`]).
+fn free_spot(p: Vec2, params: &SphParams, solids: &[(&Solid, Pose)], taken: &[Vec2]) -> bool {
     let spacing = params.particle_spacing;
     let margin = 0.5 * spacing;
     if !p.is_finite() || params.tank.is_some_and(|tank| !tank.contains(p, -margin)) {
         return false;
     }
-    if obstacles
-        .iter()
-        .any(|o| o.is_valid() && o.distance(p).0 < margin)
-    {
+    let inside = |(solid, pose): &(&Solid, Pose)| {
+        solid.shape.is_valid() && solid.shape.distance(pose.to_local(p)).0 < margin
+    };
+    if solids.iter().any(inside) {
         return false;
     }
     let min_sq = (0.8 * spacing) * (0.8 * spacing);
@@ -209,14 +209,14 @@ pub(crate) fn run_emitters(
         Option<&Transform>,
     )>,
     particles: Query<&Position, With<FluidParticle>>,
-    obstacles: Query<&Obstacle>,
+    solids: Query<(&Solid, &Transform)>,
     mut commands: Commands,
 ) {
     let dt = time.delta_secs();
     if dt <= 0.0 || emitters.is_empty() {
         return;
     }
-    let obstacles: Vec<Obstacle> = obstacles.iter().copied().collect();
+    let solids: Vec<_> = solids.iter().map(|(s, t)| (s, pose_of(t))).collect();
     for (entity, mut emitter, position, transform) in &mut emitters {
         if !emitter.active {
             continue;
@@ -227,7 +227,7 @@ pub(crate) fn run_emitters(
         // Nearby particles, the ones spawned now included, keep new ones apart.
         let reach = emitter.width + emitter.speed * dt + 2.0 * params.particle_spacing;
         let taken = near(particles.iter().map(|p| p.0), centre, reach);
-        let spot = |p: Vec2, taken: &[Vec2]| free_spot(p, &params, &obstacles, taken);
+        let spot = |p: Vec2, taken: &[Vec2]| free_spot(p, &params, &solids, taken);
         let spawned = pour(
             &mut emitter,
             centre,

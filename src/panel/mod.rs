@@ -596,7 +596,7 @@ fn render_section(ui: &mut egui::Ui, data: &mut PanelData, fluid: bool) {
                     );
                 }
                 ui.checkbox(&mut view.interpolate, "interpolate between steps");
-                ui.checkbox(&mut view.outline, "outline tank and obstacles");
+                ui.checkbox(&mut view.outline, "outline tank and solids");
                 if view != *data.view {
                     *data.view = view;
                 }

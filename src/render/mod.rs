@@ -7,7 +7,7 @@ mod colormap;
 mod liquid;
 mod view;
 
-use crate::fluid::{Density, FluidParticle, Obstacle, Pressure, Shape, SphParams};
+use crate::fluid::{Density, FluidParticle, Pressure, SphParams};
 use crate::particle::{Position, Velocity};
 use crate::schedule::{ParticleSchedule, ParticleSystems};
 use bevy::asset::RenderAssetUsages;
@@ -32,7 +32,7 @@ pub use view::{ParticleCamera, ViewInsets};
 ///   range that follows the data (quantiles, eased between frames) or is set by hand;
 /// - cameras with [`ParticleCamera`] are fitted to the tank in the window area that
 ///   [`ViewInsets`] leaves free, so the tank fills the window at any size;
-/// - the tank walls, [`Obstacle`]s and [`Solid`](crate::fluid::Solid)s are outlined with
+/// - the tank walls and [`Solid`](crate::fluid::Solid)s are outlined with
 ///   gizmos;
 /// - gravity bodies that are not fluid particles get sprites too, tinted by speed or mass
 ///   ([`BodyView`]).
@@ -138,7 +138,7 @@ pub struct ParticleView {
     pub sprite_scale: f32,
     /// Draw between fixed steps (off: draw at the last step).
     pub interpolate: bool,
-    /// Outline the tank and obstacles.
+    /// Outline the tank and the solids.
     pub outline: bool,
 }
 
@@ -446,12 +446,7 @@ fn update_sprites(
     );
 }
 
-fn draw_outlines(
-    view: Res<ParticleView>,
-    params: Res<SphParams>,
-    obstacles: Query<&Obstacle>,
-    mut gizmos: Gizmos,
-) {
+fn draw_outlines(view: Res<ParticleView>, params: Res<SphParams>, mut gizmos: Gizmos) {
     if !view.outline {
         return;
     }
@@ -459,22 +454,6 @@ fn draw_outlines(
     if let Some(tank) = params.tank {
         let size = tank.size();
         gizmos.rect_2d(Isometry2d::from_translation(0.5 * size), size, color);
-    }
-    for obstacle in &obstacles {
-        match obstacle.0 {
-            Shape::Circle { center, radius } => {
-                gizmos.circle_2d(Isometry2d::from_translation(center), radius, color);
-            }
-            Shape::Segment { start, end, radius } => {
-                let normal = (end - start).normalize_or_zero().perp() * radius;
-                gizmos.line_2d(start + normal, end + normal, color);
-                gizmos.line_2d(start - normal, end - normal, color);
-                if radius > 0.0 {
-                    gizmos.circle_2d(Isometry2d::from_translation(start), radius, color);
-                    gizmos.circle_2d(Isometry2d::from_translation(end), radius, color);
-                }
-            }
-        }
     }
 }
 

@@ -1,5 +1,5 @@
 //! The particle integrator and the collision safety net: symplectic Euler, the speed cap, and the
-//! projection out of obstacles and back into the tank. Both drivers move every particle through
+//! projection out of solids and back into the tank. Both drivers move every particle through
 //! these two functions.
 
 use super::config::SphConstants;
@@ -7,7 +7,7 @@ use super::layout::Walls;
 use bevy::math::Vec2;
 
 /// Advances one particle by `dt` (symplectic Euler: velocity first, then position with the new
-/// velocity), caps its speed, and keeps it inside the tank and out of obstacles and solids. Returns `false`
+/// velocity), caps its speed, and keeps it inside the tank and out of the solids. Returns `false`
 /// (and leaves the particle where it was, at rest) if the result would not be finite.
 #[inline]
 pub fn advance_particle(
@@ -23,7 +23,7 @@ pub fn advance_particle(
 }
 
 /// Gives one particle the velocity `v` (capped at the speed limit) and moves it by `v dt`, keeping
-/// it inside the tank and out of obstacles. Returns `false` (and leaves the particle where it
+/// it inside the tank and out of the solids. Returns `false` (and leaves the particle where it
 /// was, at rest) if the result would not be finite.
 #[inline]
 pub fn move_particle(

@@ -4,7 +4,6 @@
 //! particles in any order can fill. Plain data, no physics and no ECS.
 //!
 
-use super::boundary::Shape;
 use super::config::SphConstants;
 use super::grid::NeighborGrid;
 use super::parallel::{Parallel, chunk_size};
@@ -334,7 +333,7 @@ impl FluidSnapshot {
     }
 }
 
-/// Boundary particles of the tank, the static obstacles and the moving solids, cell-sorted,
+/// Boundary particles of the tank and the solids (still or moving), cell-sorted,
 /// with the pressure the fluid currently exerts on each and (solids) their velocity.
 #[derive(Debug, Clone, Default)]
 pub(crate) struct Walls {
@@ -342,11 +341,9 @@ pub(crate) struct Walls {
     pub points: SortedPoints,
     /// Velocities (zero but on solids), densities and pressure terms, sorted.
     pub data: NeighborData,
-    /// The obstacles the walls were sampled from, for the collision safety net.
-    pub obstacles: Vec<Shape>,
-    /// The moving solids, whose boundary particles follow the fixed ones in input order.
+    /// The solids, whose boundary particles follow the tank's in input order.
     pub solids: Vec<MovingSolid>,
-    /// Boundary particles of the tank and obstacles, in input order.
+    /// Boundary particles of the tank, in input order.
     fixed: Vec<Vec2>,
     /// The solids' motions when they were last placed (`None`: place them again).
     placed: Option<Vec<SolidMotion>>,
@@ -366,17 +363,12 @@ pub(crate) struct WallState {
 }
 
 impl Walls {
-    /// Samples the tank and `obstacles` into wall particles for spacing and support of `c`.
-    pub fn rebuild(&mut self, c: &SphConstants, obstacles: &[Shape]) {
+    /// Samples the tank into wall particles for spacing and support of `c`.
+    pub fn rebuild(&mut self, c: &SphConstants) {
         self.fixed.clear();
         if let Some(tank) = &c.tank {
             tank.sample(c.spacing, c.wall_layers, &mut self.fixed);
         }
-        let fits = |o: &&Shape| o.fits(c.spacing, c.wall_layers);
-        for obstacle in obstacles.iter().filter(fits) {
-            obstacle.sample(c.spacing, c.wall_layers, &mut self.fixed);
-        }
-        self.obstacles = obstacles.iter().filter(fits).copied().collect();
         self.placed = None;
         self.place(c);
     }
@@ -427,13 +419,9 @@ impl Walls {
         self.placed = None;
     }
 
-    /// Keeps a particle out of the obstacles and the solids (see [`Shape::push_out`] and
-    /// [`MovingSolid::push_out`]).
+    /// Keeps a particle out of the solids (see [`MovingSolid::push_out`]).
     #[inline]
     pub fn push_out(&self, position: &mut Vec2, velocity: &mut Vec2, restitution: f32) {
-        for obstacle in &self.obstacles {
-            obstacle.push_out(position, velocity, restitution);
-        }
         for solid in &self.solids {
             solid.push_out(position, velocity, restitution);
         }

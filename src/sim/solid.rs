@@ -8,7 +8,7 @@
 //! exerts on the fluid: the pressure solvers sum it pair by pair into [`MovingSolid::load`], averaged
 //! over the tick, so momentum is exchanged exactly. Nothing here is an analytic buoyancy.
 
-use super::boundary::{MAX_BOUNDARY_PARTICLES, Shape};
+use super::boundary::MAX_BOUNDARY_PARTICLES;
 use bevy::math::{Rot2, Vec2};
 use bevy::reflect::Reflect;
 use core::f32::consts::{PI, TAU};
@@ -25,7 +25,8 @@ pub enum Part {
         /// Radius, m.
         radius: f32,
     },
-    /// Every point within `radius` of the segment from `start` to `end`.
+    /// Every point within `radius` of the segment from `start` to `end` (a segment: one row
+    /// of boundary particles along it at zero radius).
     Capsule {
         /// One end of the centre line, m.
         start: Vec2,
@@ -62,15 +63,16 @@ impl Part {
         Self::Polygon { vertices }
     }
 
-    /// Whether every coordinate is finite and the part has an inside: positive radii, a
-    /// polygon of at least three corners, convex, with positive area.
+    /// Whether every coordinate is finite and the part has an inside (but a segment): a
+    /// positive radius for a circle, a radius of zero or more for a capsule, a polygon of at
+    /// least three corners, convex, with positive area.
     pub fn is_valid(&self) -> bool {
         match self {
             Self::Circle { center, radius } => {
                 center.is_finite() && radius.is_finite() && *radius > 0.0
             }
             Self::Capsule { start, end, radius } => {
-                start.is_finite() && end.is_finite() && radius.is_finite() && *radius > 0.0
+                start.is_finite() && end.is_finite() && radius.is_finite() && *radius >= 0.0
             }
             Self::Polygon { vertices } => {
                 let n = vertices.len();
@@ -109,9 +111,16 @@ impl Part {
     /// there (for a polygon, of the nearest side's line: exact inside, where it is used).
     pub fn distance(&self, p: Vec2) -> (f32, Vec2) {
         match self {
-            Self::Circle { center, radius } => Shape::circle(*center, *radius).distance(p),
+            Self::Circle { center, radius } => round_distance(*center, *radius, p),
             Self::Capsule { start, end, radius } => {
-                Shape::segment(*start, *end, *radius).distance(p)
+                let along = *end - *start;
+                let len2 = along.length_squared();
+                let t = if len2 > 0.0 {
+                    ((p - *start).dot(along) / len2).clamp(0.0, 1.0)
+                } else {
+                    0.0
+                };
+                round_distance(*start + t * along, *radius, p)
             }
             Self::Polygon { vertices } => {
                 let n = vertices.len();
@@ -143,12 +152,15 @@ impl Part {
         shoelace(&clip_below(&world, level)).abs()
     }
 
-    /// Points round the outline, in order, about `spacing` (m) apart (to draw it; none for a
-    /// circle or capsule thinner than `spacing`).
+    /// Points round the outline, in order, about `spacing` (m) apart (to draw it; a capsule
+    /// thinner than `spacing` gives its segment's ends, a circle that small nothing).
     pub fn outline(&self, spacing: f32) -> Vec<Vec2> {
         let mut points = Vec::new();
-        if spacing > 0.0 {
-            self.ring(0.0, spacing, &mut points);
+        if spacing > 0.0
+            && !self.ring(0.0, spacing, &mut points)
+            && let Self::Capsule { start, end, .. } = self
+        {
+            points.extend([*start, *end]);
         }
         points
     }
@@ -233,6 +245,16 @@ impl Part {
             Self::Polygon { vertices } => vertices.iter().map(|v| v.length()).fold(0.0, f32::max),
         }
     }
+}
+
+/// Signed distance from `p` to the surface of the points within `radius` of `axis_point`
+/// (negative inside), and the outward unit normal.
+#[inline]
+fn round_distance(axis_point: Vec2, radius: f32, p: Vec2) -> (f32, Vec2) {
+    let d = p - axis_point;
+    let len = d.length();
+    let normal = if len > 0.0 { d / len } else { Vec2::Y };
+    (len - radius, normal)
 }
 
 /// Twice the signed area of a polygon over two, m² (positive counter-clockwise).
@@ -747,6 +769,49 @@ mod tests {
             Vec2::new(0.0, 1.0),
         ];
         assert!(!SolidShape::polygon(concave.to_vec()).is_valid());
+    }
+
+    #[test]
+    fn a_still_solid_pushes_particles_out_and_a_segment_is_one_row() {
+        let still = |shape: SolidShape, at: Vec2| {
+            let mut solid = MovingSolid::new(shape, Vec2::ZERO, 0.01, 3).unwrap();
+            solid.set_motion(SolidMotion {
+                pose: Pose {
+                    position: at,
+                    angle: 0.0,
+                },
+                ..Default::default()
+            });
+            solid
+        };
+        let disc = still(SolidShape::circle(0.2), Vec2::new(1.0, 1.0));
+        let (mut p, mut v) = (Vec2::new(1.05, 1.0), Vec2::new(-1.0, 0.3));
+        disc.push_out(&mut p, &mut v, 0.0);
+        assert!((p - Vec2::new(1.2, 1.0)).length() < 1e-6, "{p}");
+        assert!(v.x.abs() < 1e-6 && (v.y - 0.3).abs() < 1e-6, "{v}");
+        let capsule = still(
+            SolidShape::capsule(Vec2::ZERO, Vec2::new(1.0, 0.0), 0.05),
+            Vec2::ZERO,
+        );
+        let (mut p, mut v) = (Vec2::new(0.5, -0.01), Vec2::new(0.0, 1.0));
+        capsule.push_out(&mut p, &mut v, 1.0);
+        assert!((p - Vec2::new(0.5, -0.05)).length() < 1e-6, "{p}");
+        assert!((v - Vec2::new(0.0, -1.0)).length() < 1e-6, "{v}");
+        // A segment (radius zero): one row along it, a spacing apart, ends included.
+        let segment = SolidShape::capsule(Vec2::ZERO, Vec2::new(0.0, 0.5), 0.0);
+        assert!(segment.is_valid());
+        let row = MovingSolid::new(segment.clone(), Vec2::ZERO, 0.02, 3).unwrap();
+        assert_eq!(row.len(), 26);
+        for p in row.local_points() {
+            assert!(p.x == 0.0 && (0.0..=0.5).contains(&p.y), "{p}");
+        }
+        assert_eq!(
+            segment.parts[0].outline(0.01),
+            vec![Vec2::ZERO, Vec2::new(0.0, 0.5)]
+        );
+        // Sampled, this disc would need some 10¹² boundary particles: it does not fit.
+        assert!(!SolidShape::circle(1.0e9).fits(0.01, 3));
+        assert!(MovingSolid::new(SolidShape::circle(1.0e9), Vec2::ZERO, 0.01, 3).is_none());
     }
 
     #[test]

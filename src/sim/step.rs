@@ -9,7 +9,6 @@
 //! [`PressureStages`]; the solvers are listed once, in [`SolverState`], whose exhaustive
 //! `match` is the one place a new solver is added.
 
-use super::boundary::Shape;
 use super::clock::SubstepClock;
 use super::config::{PressureSolver, SphConstants};
 use super::density::{max_length, mean_neighbors, with_kernels};
@@ -350,10 +349,10 @@ impl FluidStep {
         }
     }
 
-    /// Re-samples the wall particles of the tank and `shapes`.
-    pub fn rebuild_walls(&mut self, shapes: &[Shape]) {
+    /// Re-samples the wall particles of the tank.
+    pub fn rebuild_walls(&mut self) {
         let s = &mut self.shared;
-        s.walls.rebuild(&s.constants, shapes);
+        s.walls.rebuild(&s.constants);
     }
 
     /// Starts a tick of `tick` seconds: the clock's, the per-tick iteration counts and the

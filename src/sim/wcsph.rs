@@ -92,7 +92,7 @@ impl PressureStages for Wcsph {
         stable_time_step(&s.constants, s.snapshot.max_speed, max_acceleration)
     }
 
-    /// Symplectic Euler with the particles' accelerations, walls and obstacles.
+    /// Symplectic Euler with the particles' accelerations, walls and solids.
     fn integrate(
         &mut self,
         s: &mut Shared,

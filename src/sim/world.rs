@@ -3,7 +3,6 @@
 //! measured and tested against it, and it runs SPH outside Bevy. For the same particles in the
 //! same order both drivers produce the same numbers bit for bit.
 
-use super::boundary::Shape;
 use super::clock::SubstepClock;
 use super::config::SphConstants;
 use super::dfsph::DfsphReport;
@@ -37,11 +36,11 @@ impl DerefMut for SliceFluid {
 }
 
 impl SliceFluid {
-    /// Fluid particles at rest at `positions`, in the tank of `constants` with solids of
-    /// `shapes`.
-    pub fn new(constants: SphConstants, positions: Vec<Vec2>, shapes: &[Shape]) -> Self {
+    /// Fluid particles at rest at `positions`, in the tank of `constants` (add solids with
+    /// [`solids_mut`](Self::solids_mut)).
+    pub fn new(constants: SphConstants, positions: Vec<Vec2>) -> Self {
         let mut step = FluidStep::new(constants);
-        step.rebuild_walls(shapes);
+        step.rebuild_walls();
         Self {
             particles: Particles::at_rest(positions, constants.rest_density),
             step,
@@ -132,7 +131,7 @@ mod tests {
     fn block_run(params: SphParams, at: Vec2, size: Vec2, lattice: f32) -> (SliceFluid, u32, f32) {
         let c = params.constants().unwrap();
         let positions = FluidBlock::new(at, size).positions(lattice);
-        let mut fluid = SliceFluid::new(c, positions, &[]);
+        let mut fluid = SliceFluid::new(c, positions);
         let (mut fastest, mut substeps) = (0.0f32, 0);
         for tick in 0..96 {
             let taken = fluid.advance(1.0 / 64.0);
@@ -235,10 +234,10 @@ mod tests {
         let c = params.constants().unwrap();
         let block =
             |at, width, lattice| FluidBlock::new(at, Vec2::new(width, 0.1875)).positions(lattice);
-        let mut calm = SliceFluid::new(c, block(Vec2::ZERO, 0.4, 0.0025), &[]);
+        let mut calm = SliceFluid::new(c, block(Vec2::ZERO, 0.4, 0.0025));
         let calm_substeps = (0..32).map(|_| calm.advance(1.0 / 64.0)).sum::<u32>() as f32 / 32.0;
         let calm_neighbours = calm.mean_neighbors();
-        let mut fluid = SliceFluid::new(c, block(Vec2::new(0.15, 0.0), 0.1, 0.00125), &[]);
+        let mut fluid = SliceFluid::new(c, block(Vec2::new(0.15, 0.0), 0.1, 0.00125));
         assert_eq!(fluid.position.len(), 12_000);
         let (mut substeps, mut neighbours, mut busiest) = (0u32, 0.0, 0u32);
         for tick in 0..112 {

@@ -1,4 +1,4 @@
-//! Same seed, same run (a fluid with a static obstacle and a moving solid): bit for bit, across repeated runs, across thread counts (through the
+//! Same seed, same run (a fluid with a still solid and a moving one): bit for bit, across repeated runs, across thread counts (through the
 //! ECS and on plain slices), and different for a different seed. Built without the `parallel`
 //! feature (one thread), the ECS checks across thread counts do not apply; `.ci/run` compares
 //! that build's fingerprints with the threaded build's instead.
@@ -6,9 +6,7 @@
 use crate::common::*;
 use bevy::prelude::*;
 use bevy_sph2d::fluid::SliceFluid;
-use bevy_sph2d::fluid::{
-    Obstacle, PressureSolver, Solid, SolidShape, SolidVelocity, SphParams, Tank,
-};
+use bevy_sph2d::fluid::{PressureSolver, Solid, SolidShape, SolidVelocity, SphParams, Tank};
 use bevy_sph2d::gameplay::FluidBlock;
 
 fn params() -> SphParams {
@@ -77,8 +75,11 @@ fn run_ecs(seed: u64, app: &mut App) -> u64 {
 }
 
 fn run_ecs_ticks(seed: u64, app: &mut App, ticks: usize) -> u64 {
-    app.world_mut()
-        .spawn(Obstacle::circle(Vec2::new(0.4, 0.05), 0.05));
+    // A still solid (what an obstacle was).
+    app.world_mut().spawn((
+        Solid::new(SolidShape::circle(0.05)),
+        Transform::from_xyz(0.4, 0.05, 0.0),
+    ));
     // A kinematic paddle sweeping through the water: the solids' passes too.
     app.world_mut().spawn((
         Solid::new(SolidShape::rectangle(0.03, 0.12)),
@@ -195,7 +196,7 @@ fn check_slices_across_thread_counts(p: &SphParams, positions: &[Vec2], ticks: u
             .build()
             .unwrap();
         pool.install(|| {
-            let mut fluid = SliceFluid::new(p.constants().unwrap(), positions.to_vec(), &[]);
+            let mut fluid = SliceFluid::new(p.constants().unwrap(), positions.to_vec());
             for _ in 0..ticks {
                 fluid.advance(TICK);
             }

@@ -4,8 +4,8 @@ use crate::common::*;
 use bevy::prelude::*;
 use bevy_sph2d::fluid::SliceFluid;
 use bevy_sph2d::fluid::{
-    Acceleration, KernelKind, Obstacle, PressureSolver, SphParams, SphSubstep, SphSubstepSystems,
-    Tank,
+    Acceleration, KernelKind, MovingSolid, Pose, PressureSolver, Solid, SolidMotion, SolidShape,
+    SphParams, SphSubstep, SphSubstepSystems, Tank,
 };
 use bevy_sph2d::gameplay::FluidBlock;
 
@@ -27,7 +27,8 @@ fn check_driver(kernel: KernelKind, base: SphParams, hook: bool) {
     let block = FluidBlock::dam_break(0.15, 0.2)
         .with_seed(3)
         .with_jitter(0.1);
-    let obstacle = Obstacle::circle(Vec2::new(0.35, 0.05), 0.04);
+    // A still solid (what an obstacle was).
+    let (disc, at) = (SolidShape::circle(0.04), Vec2::new(0.35, 0.05));
 
     let mut app = create_app(params.clone());
     if hook {
@@ -36,16 +37,25 @@ fn check_driver(kernel: KernelKind, base: SphParams, hook: bool) {
             (|_: Query<&Acceleration>| {}).in_set(SphSubstepSystems::ExternalForces),
         );
     }
-    app.world_mut().spawn(obstacle);
+    app.world_mut().spawn((
+        Solid::new(disc.clone()),
+        Transform::from_translation(at.extend(0.0)),
+    ));
     let ids = spawn(&mut app, block);
     run(&mut app, 20);
     let ecs = states(&mut app);
 
-    let mut fluid = SliceFluid::new(
-        params.constants().unwrap(),
-        block.positions_for(&params),
-        &[obstacle.0],
-    );
+    let c = params.constants().unwrap();
+    let mut fluid = SliceFluid::new(c, block.positions_for(&params));
+    let mut still = MovingSolid::new(disc, Vec2::ZERO, c.spacing, c.wall_layers).unwrap();
+    still.set_motion(SolidMotion {
+        pose: Pose {
+            position: at,
+            angle: 0.0,
+        },
+        ..Default::default()
+    });
+    fluid.solids_mut().push(still);
     for _ in 0..20 {
         fluid.advance(TICK);
     }

@@ -5,7 +5,7 @@
 
 use crate::common::*;
 use bevy::prelude::*;
-use bevy_sph2d::fluid::{SphParams, SphStats, Tank};
+use bevy_sph2d::fluid::{Solid, SolidShape, SphParams, SphStats, Tank};
 use bevy_sph2d::gameplay::FluidBlock;
 use bevy_sph2d::prelude::*;
 use rand::{RngExt, SeedableRng};
@@ -109,7 +109,11 @@ fn soak(base: SphParams) {
                     app.world_mut().despawn(e);
                 } else {
                     let c = Vec2::new(rng.random_range(0.1..0.7), rng.random_range(0.05..0.4));
-                    obstacle = Some(app.world_mut().spawn(Obstacle::circle(c, 0.05)).id());
+                    let disc = (
+                        Solid::new(SolidShape::circle(0.05)),
+                        Transform::from_translation(c.extend(0.0)),
+                    );
+                    obstacle = Some(app.world_mut().spawn(disc).id());
                 }
             }
             3 => {

@@ -87,7 +87,7 @@ fn a_moving_paddle_exchanges_momentum_exactly() {
         };
         let c = params.constants().expect("valid");
         let block = FluidBlock::new(Vec2::ZERO, Vec2::new(0.3, 0.2));
-        let mut fluid = SliceFluid::new(c, block.positions_for(&params), &[]);
+        let mut fluid = SliceFluid::new(c, block.positions_for(&params));
         let shape = SolidShape::rectangle(0.04, 0.3);
         let mut paddle = MovingSolid::new(shape, Vec2::ZERO, c.spacing, c.wall_layers).unwrap();
         paddle.set_motion(SolidMotion {
@@ -154,7 +154,7 @@ fn a_still_solid_leaves_still_water_still() {
             .into_iter()
             .filter(clear)
             .collect();
-        let mut fluid = SliceFluid::new(c, positions, &[]);
+        let mut fluid = SliceFluid::new(c, positions);
         fluid.solids_mut().push(disc);
         while fluid.clock().time < 3.0 {
             fluid.advance(TICK);

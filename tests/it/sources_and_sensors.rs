@@ -8,7 +8,7 @@ use crate::common;
 use crate::common::{TICK, create_app, run, spawn};
 use bevy::ecs::message::Messages;
 use bevy::prelude::*;
-use bevy_sph2d::fluid::{FluidParticle, Obstacle, SphParams, SphSolver, SphStats, Tank};
+use bevy_sph2d::fluid::{FluidParticle, Solid, SolidShape, SphParams, SphSolver, SphStats, Tank};
 use bevy_sph2d::gameplay::{
     EmitterRate, FluidBlock, FluidDrain, FluidEmitter, FluidEntered, FluidLeft, FluidRegion,
     FluidSensor, probe,
@@ -278,8 +278,10 @@ fn a_solid_too_big_to_sample_is_refused_and_the_fluid_runs_on() {
     let before = particles(&mut app);
     let walls = app.world().resource::<SphStats>().wall_particles;
     // Sampled, this disc would need some 10¹² boundary particles (terabytes).
-    app.world_mut()
-        .spawn(Obstacle::circle(Vec2::new(0.5, 0.3), 1.0e9));
+    app.world_mut().spawn((
+        Solid::new(SolidShape::circle(1.0e9)),
+        Transform::from_xyz(0.5, 0.3, 0.0),
+    ));
     run(&mut app, 10);
     assert_eq!(particles(&mut app), before);
     assert_eq!(app.world().resource::<SphStats>().wall_particles, walls);
@@ -290,8 +292,10 @@ fn a_solid_too_big_to_sample_is_refused_and_the_fluid_runs_on() {
 fn bad_emitters_drains_and_sensors_change_nothing() {
     let mut app = resting_layer();
     let before = particles(&mut app);
-    app.world_mut()
-        .spawn(Obstacle::circle(Vec2::new(0.8, 0.45), 0.05));
+    app.world_mut().spawn((
+        Solid::new(SolidShape::circle(0.05)),
+        Transform::from_xyz(0.8, 0.45, 0.0),
+    ));
     let world = app.world_mut();
     world.spawn((
         FluidEmitter::new(f32::NAN, Vec2::X, 1.0, EmitterRate::Volume(0.01)),
@@ -301,7 +305,7 @@ fn bad_emitters_drains_and_sensors_change_nothing() {
         FluidEmitter::new(0.05, Vec2::ZERO, 1.0, EmitterRate::Volume(0.01)),
         Transform::from_xyz(0.3, 0.4, 0.0),
     ));
-    // Inside the obstacle, and outside the tank.
+    // Inside the solid, and outside the tank.
     world.spawn((
         FluidEmitter::new(0.02, Vec2::X, 0.2, EmitterRate::Volume(0.001)),
         Transform::from_xyz(0.8, 0.45, 0.0),

@@ -119,11 +119,8 @@ impl Dfsph {
     }
 }
 
-/// The velocity of the obstacle (at rest) or moving solid at `x`, if `x` is inside one.
+/// The velocity of the solid at `x`, if `x` is inside one.
 fn solid_velocity(walls: &Walls, x: Vec2) -> Option<Vec2> {
-    if walls.obstacles.iter().any(|o| o.distance(x).0 < 0.0) {
-        return Some(Vec2::ZERO);
-    }
     walls
         .solids
         .iter()

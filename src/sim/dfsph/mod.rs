@@ -606,7 +606,7 @@ mod tests {
         let mut fluid = FluidSnapshot::default();
         fluid.rebuild(&c, &points, &vec![Vec2::ZERO; points.len()], &Sequential);
         let mut walls = Walls::default();
-        walls.rebuild(&c, &[]);
+        walls.rebuild(&c);
         let mut dfsph = Dfsph::default();
         dfsph.prepare(&c, &fluid, &walls, |_| Vec2::ZERO, &Sequential);
         let accelerations: Vec<Vec2> = (0..fluid.len())
