@@ -39,7 +39,7 @@ fn headless(seconds: f64) {
         TransformPlugin,
         SphPlugin::default().with_params(harbour_params()),
         avian2d::prelude::PhysicsPlugins::default(),
-        FluidCouplingPlugin,
+        FluidCouplingPlugin::with_tank_walls(),
         HarbourScene,
     ))
     .insert_resource(TimeUpdateStrategy::FixedTimesteps(1));

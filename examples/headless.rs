@@ -446,8 +446,7 @@ fn record(config: &Config) -> std::io::Result<()> {
 mod float {
     use super::{Body, Config};
     use avian2d::prelude::{
-        AngularVelocity, Collider, ColliderDensity, Gravity, LinearVelocity, PhysicsPlugins,
-        RigidBody,
+        AngularVelocity, Collider, ColliderDensity, LinearVelocity, PhysicsPlugins, RigidBody,
     };
     use bevy::prelude::*;
     use bevy_sph2d::fluid::{MovingSolid, Part, Pose, SolidMotion};
@@ -463,9 +462,8 @@ mod float {
         app.add_plugins((
             TransformPlugin,
             PhysicsPlugins::default(),
-            FluidCouplingPlugin,
-        ))
-        .insert_resource(Gravity(params.gravity));
+            FluidCouplingPlugin::with_tank_walls(),
+        ));
         // avian registers some of its resources in `Plugin::finish`, which `App::run` calls.
         app.finish();
         app.cleanup();

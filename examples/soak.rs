@@ -271,8 +271,6 @@ fn main() {
                 _ => {}
             }
             if params.validate().is_ok() {
-                #[cfg(feature = "avian")]
-                bodies::set_gravity(world, params.gravity);
                 *world.resource_mut::<SphParams>() = params;
             }
             #[cfg(feature = "avian")]
@@ -337,7 +335,7 @@ fn main() {
 /// Feature `avian`: three coupled avian bodies in the soak's tank.
 #[cfg(feature = "avian")]
 mod bodies {
-    use avian2d::prelude::{Collider, ColliderDensity, Gravity, PhysicsPlugins, RigidBody};
+    use avian2d::prelude::{Collider, ColliderDensity, PhysicsPlugins, RigidBody};
     use bevy::prelude::*;
     use bevy_sph2d::prelude::*;
 
@@ -346,7 +344,7 @@ mod bodies {
         app.add_plugins((
             TransformPlugin,
             PhysicsPlugins::default(),
-            FluidCouplingPlugin,
+            FluidCouplingPlugin::with_tank_walls(),
         ));
         app.finish();
         app.cleanup();
@@ -370,11 +368,6 @@ mod bodies {
                     .id()
             })
             .collect()
-    }
-
-    /// Keeps avian's gravity the fluid's.
-    pub fn set_gravity(world: &mut World, gravity: Vec2) {
-        world.insert_resource(Gravity(gravity));
     }
 
     /// Lifts `body` to `at` and lets it fall.

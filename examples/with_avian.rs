@@ -62,7 +62,7 @@ pub fn game(app: &mut App) {
     app.add_plugins((
         PhysicsPlugins::default(),
         ParticlePlugins::default().set(SphPlugin::default().with_params(params())),
-        FluidCouplingPlugin,
+        FluidCouplingPlugin::with_tank_walls(),
     ));
     scene(app);
 }

@@ -11,14 +11,15 @@
 //! exchange is explicit, once a tick, so a dynamic body is stepped with an added mass (see
 //! [`ADDED_MASS_RATIO`](crate::fluid::ADDED_MASS_RATIO)): avian is given the acceleration
 //! `a − g` with `(m + mₐ) a = F + m g`, which rests where the fluid's force alone would hold it.
-//! Keep avian's `Gravity` equal to the fluid's gravity.
+//! Gravity is set in one place, `SphParams::gravity`: the plugin keeps avian's `Gravity` equal
+//! to it. Tank walls for avian are opt-in ([`FluidCouplingPlugin::with_tank_walls`]).
 
 #[cfg(feature = "render")]
 mod pointer;
 
 use crate::fluid::{
-    FluidForce, Part, Solid, SolidShape, SolidVelocity, SphParams, SphPlugin, SphSystems, Tank,
-    coupled_acceleration,
+    FluidForce, Part, PressureSolver, Solid, SolidShape, SolidVelocity, SphParams, SphPlugin,
+    SphSystems, Tank, coupled_acceleration,
 };
 use crate::schedule::{ParticleSchedule, ParticleSystems};
 use avian2d::parry::shape::TypedShape;
@@ -27,9 +28,24 @@ use avian2d::prelude::WriteRigidBodyForces;
 use bevy::prelude::*;
 
 /// Couples avian2d bodies marked [`FluidCoupled`] with the fluid (see the module docs). Add it
-/// beside `SphPlugin` and avian's `PhysicsPlugins`.
+/// beside `ParticlePlugins` (or `SphPlugin`) and avian's `PhysicsPlugins`, in any order.
+///
+/// Gravity is set in one place, [`SphParams::gravity`]: the plugin keeps avian's `Gravity`
+/// equal to it.
 #[derive(Debug, Clone, Copy, Default)]
-pub struct FluidCouplingPlugin;
+pub struct FluidCouplingPlugin {
+    /// Put static avian bodies ([`TankWall`]) round the fluid's tank, so that bodies rest on
+    /// its floor and stay inside (off by default: a game with its own level geometry has its
+    /// own colliders).
+    pub tank_walls: bool,
+}
+
+impl FluidCouplingPlugin {
+    /// The coupling with avian walls round the fluid's tank.
+    pub fn with_tank_walls() -> Self {
+        Self { tank_walls: true }
+    }
+}
 
 /// Marks an avian body (with a `Collider` on the same entity) as a solid of the fluid.
 #[derive(Component, Reflect, Debug, Clone, Copy, Default, PartialEq)]
@@ -37,7 +53,8 @@ pub struct FluidCouplingPlugin;
 pub struct FluidCoupled;
 
 /// One of the four static avian bodies the coupling puts round the fluid's tank (so bodies
-/// rest on its floor and stay inside), re-made when the tank changes.
+/// rest on its floor and stay inside), re-made when the tank changes; only with
+/// [`FluidCouplingPlugin::tank_walls`].
 #[derive(Component, Debug, Clone, Copy, PartialEq)]
 pub struct TankWall;
 
@@ -66,10 +83,18 @@ impl Plugin for FluidCouplingPlugin {
             return;
         }
         let schedule = ParticleSchedule::of(app);
+        if self.tank_walls {
+            app.add_systems(
+                schedule,
+                tank_walls
+                    .in_set(ParticleSystems::Prepare)
+                    .before(attach_solids),
+            );
+        }
         app.add_systems(
             schedule,
             (
-                (tank_walls, attach_solids, copy_velocities)
+                (share_gravity, attach_solids, copy_velocities)
                     .chain()
                     .in_set(ParticleSystems::Prepare)
                     .before(SphSystems::Prepare),
@@ -168,6 +193,23 @@ fn tank_walls(
     }
 }
 
+/// Keeps avian's `Gravity` equal to the fluid's ([`SphParams::gravity`]), the one place
+/// gravity is set.
+fn share_gravity(
+    mut commands: Commands,
+    params: Res<SphParams>,
+    gravity: Option<ResMut<avian::Gravity>>,
+) {
+    match gravity {
+        Some(mut gravity) => {
+            if gravity.0 != params.gravity {
+                gravity.0 = params.gravity;
+            }
+        }
+        None => commands.insert_resource(avian::Gravity(params.gravity)),
+    }
+}
+
 /// Coupled bodies new this tick or whose collider changed.
 type NewOrReshaped = (
     With<FluidCoupled>,
@@ -185,8 +227,18 @@ type Inertia = (
 /// force a step late).
 fn attach_solids(
     mut commands: Commands,
+    params: Res<SphParams>,
     bodies: Query<(Entity, &avian::Collider, &avian::ComputedCenterOfMass), NewOrReshaped>,
+    mut warned: Local<bool>,
 ) {
+    if params.solver == PressureSolver::Wcsph && !bodies.is_empty() && !*warned {
+        *warned = true;
+        warn!(
+            "FluidCouplingPlugin: the WCSPH solver throws coupled bodies lighter than water out \
+             of it (relative density 0.3 and 0.5 measured) and stirs still water round still \
+             ones; couple bodies with the DFSPH solver (SphParams::solver, the default)"
+        );
+    }
     for (entity, collider, center) in &bodies {
         let Some(shape) = shape_of(collider) else {
             warn!("body {entity}: its collider's shape cannot be a solid of the fluid");

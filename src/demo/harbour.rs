@@ -79,7 +79,7 @@ impl Plugin for HarbourDemoPlugin {
             ParticlePlugins::default().set(SphPlugin::default().with_params(harbour_params())),
             ParticleUiPlugins,
             PhysicsPlugins::default(),
-            FluidCouplingPlugin,
+            FluidCouplingPlugin::with_tank_walls(),
             HarbourScene,
         ))
         .insert_resource(ClearColor(Color::srgb(0.04, 0.05, 0.07)))

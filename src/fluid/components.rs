@@ -14,7 +14,7 @@ use bevy::prelude::*;
 /// # use bevy::prelude::*;
 /// # use bevy_sph2d::prelude::*;
 /// fn pour(mut commands: Commands) {
-///     commands.spawn((FluidParticle, Position(Vec2::new(0.5, 1.0))));
+///     commands.spawn((FluidParticle, particle::Position(Vec2::new(0.5, 1.0))));
 /// }
 /// ```
 #[derive(Component, Reflect, Debug, Clone, Copy, Default, PartialEq)]

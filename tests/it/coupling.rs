@@ -4,10 +4,10 @@
 
 use crate::common::*;
 use avian2d::prelude::{
-    AngularVelocity, Collider, ColliderDensity, LinearVelocity, PhysicsPlugins, RigidBody,
+    AngularVelocity, Collider, ColliderDensity, Gravity, LinearVelocity, PhysicsPlugins, RigidBody,
 };
 use bevy::prelude::*;
-use bevy_sph2d::coupling::{FluidCoupled, FluidCouplingPlugin};
+use bevy_sph2d::coupling::{FluidCoupled, FluidCouplingPlugin, TankWall};
 use bevy_sph2d::fluid::{
     FluidForce, FluidParticle, Position, Solid, SphParams, SphSystems, Submerged, Tank,
 };
@@ -25,7 +25,7 @@ fn harbour_app(height: f32) -> App {
     app.add_plugins((
         TransformPlugin,
         PhysicsPlugins::default(),
-        FluidCouplingPlugin,
+        FluidCouplingPlugin::with_tank_walls(),
     ));
     // avian registers some of its resources in `Plugin::finish`, which `App::run` calls.
     app.finish();
@@ -209,4 +209,39 @@ fn a_crate_dropped_from_half_a_metre_splashes_and_settles() {
     assert!(speed < 0.08, "still moving at {speed} m/s");
     assert_eq!(most_inside(&app), 0, "particles inside the crate");
     assert!(all_finite(&states(&mut app)));
+}
+
+/// Gravity is set in one place: avian's follows `SphParams::gravity`, tilted or not. Tank walls
+/// for avian come only when asked for.
+#[test]
+fn avian_takes_the_fluids_gravity_and_tank_walls_are_opt_in() {
+    let walls = |app: &mut App| {
+        let world = app.world_mut();
+        world.query::<&TankWall>().iter(world).count()
+    };
+    let mut app = harbour_app(0.4);
+    run(&mut app, 1);
+    assert_eq!(walls(&mut app), 4);
+    let tilted = Vec2::new(1.0, -9.7);
+    app.world_mut().resource_mut::<SphParams>().gravity = tilted;
+    run(&mut app, 1);
+    assert_eq!(app.world().resource::<Gravity>().0, tilted);
+
+    let mut bare = create_app(SphParams {
+        tank: Some(Tank::new(0.8, 0.4)),
+        ..SphParams::water()
+    });
+    bare.add_plugins((
+        TransformPlugin,
+        PhysicsPlugins::default(),
+        FluidCouplingPlugin::default(),
+    ));
+    bare.finish();
+    bare.cleanup();
+    run(&mut bare, 2);
+    assert_eq!(walls(&mut bare), 0);
+    assert_eq!(
+        bare.world().resource::<Gravity>().0,
+        SphParams::water().gravity
+    );
 }

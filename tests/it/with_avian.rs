@@ -121,7 +121,7 @@ fn the_plugins_make_the_same_app_in_every_order() {
                         ParticlePlugins::default()
                             .set(SphPlugin::default().with_params(example::params())),
                     ),
-                    _ => app.add_plugins(FluidCouplingPlugin),
+                    _ => app.add_plugins(FluidCouplingPlugin::with_tank_walls()),
                 };
             }
             example::scene(&mut app);
