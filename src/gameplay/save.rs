@@ -2,7 +2,7 @@
 //! order, the [`SphParams`] and the sub-step clock, as one JSON document (`serde_json`; the
 //! parameters through Bevy's reflection serializer, so a new parameter needs no code here).
 //! Restoring into an app with the same plugins reproduces the run bit for bit. See
-//! [`SphPlugin`](crate::fluid::SphPlugin) and the README's format section.
+//! [`SphPlugin`](crate::fluid::SphPlugin) and the format table in `docs/guide.md` ("Save and restore").
 
 use crate::fluid::SphParams;
 use crate::fluid::SphSolver;

@@ -101,8 +101,8 @@ impl PressureSolver {
 /// a coarse grid under the particles plus most of the last sub-step's excess over it
 /// ([`grid_start`](Self::grid_start)): a cost per sub-step that does not grow with the depth in
 /// particles. [`reference`](Self::reference) solves to the tolerances instead, whatever the
-/// iterations (26 a sub-step on the demo's 2,500 particles, 60 at 10,000). The README's "The
-/// incompressible solver" section lists where it differs from the paper.
+/// iterations (26 a sub-step on the demo's 2,500 particles, 60 at 10,000). `docs/physics.md`'s
+/// "The incompressible solver" section lists where it differs from the paper.
 #[derive(Reflect, Debug, Clone, Copy, PartialEq)]
 #[reflect(Default, Debug, PartialEq)]
 pub struct DfsphSettings {

@@ -477,7 +477,7 @@ impl Walls {
 pub(crate) const NEIGHBOR_LIST_CAPACITY: usize = 48;
 
 /// The sorted slots of a particle's fluid neighbours (inside the support, itself excluded), as
-/// found by [`density_and_neighbors_at`](super::solver::density_and_neighbors_at) and reused by
+/// found by [`density_and_neighbors_at`](super::density::density_and_neighbors_at) and reused by
 /// [`acceleration_at`](super::wcsph::acceleration_at), so the force pass
 /// neither searches the grid for fluid neighbours nor evaluates candidates outside the support.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

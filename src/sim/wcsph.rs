@@ -202,7 +202,7 @@ pub fn wall_state_at<K: RadialKernel>(
 /// pressure, artificial and laminar viscosity from fluid and wall neighbours, plus gravity.
 ///
 /// Fluid neighbours come from `list` (filled by
-/// [`density_and_neighbors_at`](super::solver::density_and_neighbors_at) this sub-step), or
+/// [`density_and_neighbors_at`](super::density::density_and_neighbors_at) this sub-step), or
 /// from the grid if it overflowed; wall neighbours always come from the wall grid, and add
 /// pressure and laminar viscosity (no-slip) but no artificial viscosity. Lanes are
 /// evaluated four at a time and those outside the support masked, so there is no branch per
