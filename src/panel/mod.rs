@@ -597,6 +597,7 @@ fn render_section(ui: &mut egui::Ui, data: &mut PanelData, fluid: bool) {
                 }
                 ui.checkbox(&mut view.interpolate, "interpolate between steps");
                 ui.checkbox(&mut view.outline, "outline tank and solids");
+                ui.checkbox(&mut view.fill_solids, "fill solids");
                 if view != *data.view {
                     *data.view = view;
                 }

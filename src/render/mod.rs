@@ -5,6 +5,7 @@
 mod bodies;
 mod colormap;
 mod liquid;
+mod solids;
 mod view;
 
 use crate::fluid::{Density, FluidParticle, Pressure, SphParams};
@@ -32,8 +33,9 @@ pub use view::{ParticleCamera, ViewInsets};
 ///   range that follows the data (quantiles, eased between frames) or is set by hand;
 /// - cameras with [`ParticleCamera`] are fitted to the tank in the window area that
 ///   [`ViewInsets`] leaves free, so the tank fills the window at any size;
-/// - the tank walls and [`Solid`](crate::fluid::Solid)s are outlined with
-///   gizmos;
+/// - [`Solid`](crate::fluid::Solid)s without a sprite or mesh of their own are drawn filled,
+///   a colour each, darker below the waterline; the tank walls and the solids are outlined
+///   with gizmos;
 /// - gravity bodies that are not fluid particles get sprites too, tinted by speed or mass
 ///   ([`BodyView`]).
 #[derive(Debug, Clone, Copy, Default)]
@@ -140,6 +142,9 @@ pub struct ParticleView {
     pub interpolate: bool,
     /// Outline the tank and the solids.
     pub outline: bool,
+    /// Draw each solid filled, in a colour of its own, darker below its waterline (not one
+    /// with a sprite or mesh of its own).
+    pub fill_solids: bool,
 }
 
 impl Default for ParticleView {
@@ -154,6 +159,7 @@ impl Default for ParticleView {
             sprite_scale: 1.8,
             interpolate: true,
             outline: true,
+            fill_solids: true,
         }
     }
 }
@@ -210,7 +216,14 @@ impl Plugin for ParticleRenderPlugin {
                         .in_set(ParticleRenderSystems::Sprites),
                 ),
             )
-            .add_systems(Update, (draw_outlines, draw_solids));
+            .add_systems(
+                Update,
+                (
+                    draw_outlines,
+                    draw_solids,
+                    (solids::attach_fills, solids::update_fills).chain(),
+                ),
+            );
         liquid::build(app);
     }
 

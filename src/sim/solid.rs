@@ -141,6 +141,13 @@ impl Part {
     /// The part's area below the level line `y = level` (world, m) when placed at `pose`, m²
     /// (curves as 64-gons).
     pub fn area_below(&self, pose: Pose, level: f32) -> f32 {
+        shoelace(&self.below(pose, level)).abs()
+    }
+
+    /// The part placed at `pose`, cut by the level line `y = level` (world, m): the convex
+    /// polygon of its part below the line, in world coordinates, in order round it (curves as
+    /// 64-gons; empty if none of it is below).
+    pub fn below(&self, pose: Pose, level: f32) -> Vec<Vec2> {
         let corners = match self {
             Self::Polygon { vertices } => vertices.clone(),
             Self::Circle { radius, .. } => self.outline(TAU * radius / 64.0),
@@ -149,7 +156,7 @@ impl Part {
             }
         };
         let world: Vec<Vec2> = corners.into_iter().map(|p| pose.apply(p)).collect();
-        shoelace(&clip_below(&world, level)).abs()
+        clip_below(&world, level)
     }
 
     /// Points round the outline, in order, about `spacing` (m) apart (to draw it; a capsule
