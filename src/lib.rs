@@ -29,7 +29,7 @@
 //!   under crate-wide sets ([`ParticleSystems`], [`SphSubstepSystems`]) that every plugin
 //!   nests under.
 //! - [`gameplay`]: emitters, drains, sensors and the point probe ([`gameplay::FluidEmitter`],
-//!   [`gameplay::FluidDrain`], [`gameplay::FluidSensor`], [`gameplay::probe`]), spawners,
+//!   [`gameplay::FluidDrain`], [`gameplay::FluidSensor`], [`gameplay::FluidQuery`]), spawners,
 //!   scenarios, save and restore ([`gameplay::save_fluid`], [`gameplay::load_fluid`]).
 //! - `ParticleUiPlugins` (features `render`, `egui`, on by default): a liquid view or sprites
 //!   tinted through a colour map (`render::ParticleRenderPlugin`), mouse and keyboard tools
@@ -221,8 +221,8 @@ pub mod prelude {
         SphStats, SphSystems, Submerged, Tank,
     };
     pub use crate::gameplay::{
-        EmitterRate, FluidBlock, FluidDrain, FluidEmitter, FluidEntered, FluidLeft, FluidRegion,
-        FluidSensor, ScenarioKind, SphScenario,
+        EmitterRate, FluidBlock, FluidDrain, FluidEmitter, FluidEntered, FluidLeft, FluidQuery,
+        FluidRegion, FluidSensor, ScenarioKind, SphScenario,
     };
     pub use crate::gravity::{
         FluidPlanets, GalaxyDisc, GravityAcceleration, GravityParams, GravityPlugin, GravityStats,

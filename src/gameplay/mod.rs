@@ -1,5 +1,5 @@
 //! Gameplay on top of the fluid: emitters and drains ([`FluidEmitter`], [`FluidDrain`]),
-//! sensors with messages and the point probe ([`FluidSensor`], [`probe`]), spawners
+//! sensors with messages and the fluid as a system reads it ([`FluidSensor`], [`FluidQuery`]), spawners
 //! ([`FluidBlock`]), scenarios ([`SphScenario`]) and save and restore ([`save_fluid`],
 //! [`SnapshotSlot`]). [`FluidGameplayPlugin`] runs them; the fluid's
 //! [`SphPlugin`](crate::fluid::SphPlugin) adds it.
@@ -16,9 +16,7 @@ pub use save::{
     load_fluid_from, save_fluid, save_fluid_to,
 };
 pub use scenario::{SCENARIO_TANK, ScenarioKind, SphScenario};
-pub use sensors::{
-    FluidEntered, FluidLeft, FluidSample, FluidSensor, SensorReading, probe, wall_pressure,
-};
+pub use sensors::{FluidEntered, FluidLeft, FluidQuery, FluidSample, FluidSensor, SensorReading};
 pub use sources::{EmitterRate, FluidDrain, FluidEmitter};
 pub use spawn::FluidBlock;
 

@@ -1,12 +1,13 @@
 //! What a game reads from the fluid: [`FluidSensor`] regions that report, every fixed tick, how
 //! much fluid is inside and how it moves, with [`FluidEntered`] and [`FluidLeft`] messages when
-//! it crosses the sensor's thresholds; and [`probe`], the fluid's density, velocity and pressure
-//! at any point by SPH interpolation. See [`SphPlugin`](crate::fluid::SphPlugin).
+//! it crosses the sensor's thresholds; and [`FluidQuery`], the fluid's density, velocity and
+//! pressure at any point by SPH interpolation, and its particles in a region. See [`SphPlugin`](crate::fluid::SphPlugin).
 
 use crate::fluid::SphParams;
 use crate::fluid::SphSolver;
 use crate::fluid::{Density, FluidParticle, Position, Pressure, Velocity};
 use crate::sim::region::FluidRegion;
+use bevy::ecs::system::SystemParam;
 use bevy::prelude::*;
 
 /// A region that measures the fluid in it every fixed tick (into [`reading`](Self::reading))
@@ -168,7 +169,7 @@ pub(crate) fn run_sensors(
     }
 }
 
-/// The fluid at a point, from [`probe`].
+/// The fluid at a point, from [`FluidQuery::sample`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FluidSample {
     /// Density, kg/m³.
@@ -182,25 +183,55 @@ pub struct FluidSample {
     pub coverage: f32,
 }
 
-/// The fluid's density, velocity and pressure at `x` (m), interpolated from the particles of
-/// the last sub-step within one kernel support by Shepard's normalised SPH sum
-/// `A(x) = Σⱼ Aⱼ W(x − xⱼ) / Σⱼ W(x − xⱼ)` (every particle has the same volume), with the
-/// solver's kernel; `None` where no particle is that close. Read it from any system after
-/// [`SphSystems::Simulate`](crate::fluid::SphSystems::Simulate): `probe(&solver, point)` with
-/// `solver: Res<SphSolver>`.
-pub fn probe(solver: &SphSolver, x: Vec2) -> Option<FluidSample> {
-    sample(solver, x, false)
+/// The fluid as a system reads it, the way avian's `SpatialQuery` reads colliders: its state at
+/// any point, the pressure it puts on a wall, the particles in a region. Read it after
+/// [`SphSystems::Simulate`](crate::fluid::SphSystems::Simulate) (in
+/// [`SphSystems::Finish`](crate::fluid::SphSystems::Finish) or later) for this tick's fluid.
+///
+/// ```
+/// # use bevy::prelude::*;
+/// # use bevy_sph2d::gameplay::FluidQuery;
+/// fn bob(fluid: FluidQuery) {
+///     if let Some(water) = fluid.sample(Vec2::new(0.5, 0.1)) {
+///         info!("{} Pa, flowing at {} m/s", water.pressure, water.velocity.length());
+///     }
+/// }
+/// # bevy::ecs::system::assert_is_system(bob);
+/// ```
+#[derive(SystemParam)]
+pub struct FluidQuery<'w, 's> {
+    solver: Res<'w, SphSolver>,
+    particles: Query<'w, 's, (Entity, &'static Position), With<FluidParticle>>,
 }
 
-/// The pressure (Pa) the fluid exerts on a wall at the point `x` (m) of the wall's surface:
-/// the [`probe`]'s sum with each particle's pressure carried to the wall by the hydrostatic
-/// head, `p_w = Σⱼ Wⱼ (pⱼ + ρⱼ g·(x − xⱼ)) / Σⱼ Wⱼ`, as the walls' boundary particles take it
-/// (Adami et al. 2012). The particles next to a wall lie half a spacing to two spacings from
-/// it, so the plain probe there reads the pressure of a point inside the fluid, low by
-/// `ρ₀ g` times that distance. `None` where no particle is within one support of `x`. Read it
-/// as the probe, after [`SphSystems::Simulate`](crate::fluid::SphSystems::Simulate).
-pub fn wall_pressure(solver: &SphSolver, x: Vec2) -> Option<f32> {
-    sample(solver, x, true).map(|s| s.pressure)
+impl FluidQuery<'_, '_> {
+    /// The fluid's density, velocity and pressure at `x` (m), interpolated from the particles
+    /// of the last sub-step within one kernel support by Shepard's normalised SPH sum
+    /// `A(x) = Σⱼ Aⱼ W(x − xⱼ) / Σⱼ W(x − xⱼ)` (every particle has the same volume), with the
+    /// solver's kernel; `None` where no particle is that close.
+    pub fn sample(&self, x: Vec2) -> Option<FluidSample> {
+        sample(&self.solver, x, false)
+    }
+
+    /// The pressure (Pa) the fluid exerts on a wall at the point `x` (m) of the wall's surface:
+    /// [`sample`](Self::sample)'s sum with each particle's pressure carried to the wall by the
+    /// hydrostatic head, `p_w = Σⱼ Wⱼ (pⱼ + ρⱼ g·(x − xⱼ)) / Σⱼ Wⱼ`, as the walls' boundary
+    /// particles take it (Adami et al. 2012). The particles next to a wall lie half a spacing
+    /// to two spacings from it, so the plain sample there reads the pressure of a point inside
+    /// the fluid, low by `ρ₀ g` times that distance. `None` where no particle is within one
+    /// support of `x`.
+    pub fn wall_pressure(&self, x: Vec2) -> Option<f32> {
+        sample(&self.solver, x, true).map(|s| s.pressure)
+    }
+
+    /// The fluid particles in `region`, with their positions (m), in no particular order (a
+    /// pass over the particles).
+    pub fn particles_in(&self, region: FluidRegion) -> impl Iterator<Item = (Entity, Vec2)> {
+        self.particles
+            .iter()
+            .map(|(entity, position)| (entity, position.0))
+            .filter(move |&(_, x)| region.contains(x))
+    }
 }
 
 /// The probe's sum at `x`; with `head`, each particle's pressure carried to `x` hydrostatically.

@@ -4,7 +4,7 @@
 use crate::common::*;
 use bevy::prelude::*;
 use bevy_sph2d::fluid::{SphParams, Tank};
-use bevy_sph2d::gameplay::FluidBlock;
+use bevy_sph2d::gameplay::{FluidBlock, FluidQuery};
 use bevy_sph2d::prelude::*;
 use bevy_sph2d::validation::{DamBreakSettling, MartinMoyce, RestingLayer, compare};
 
@@ -155,9 +155,11 @@ fn resting_layer(base: SphParams, within: Hydrostatics) {
 
     // The wall pressure probe at the foot and the middle of the right wall reads the
     // hydrostatic pressure of its depth (within 5% of the floor pressure).
-    let solver = app.world().resource::<bevy_sph2d::fluid::SphSolver>();
+    let mut state = bevy::ecs::system::SystemState::<FluidQuery>::new(app.world_mut());
+    let fluid = state.get(app.world()).expect("the fluid is there");
     for y in [0.5 * spacing, 0.02, 0.1] {
-        let p = bevy_sph2d::gameplay::wall_pressure(solver, Vec2::new(tank.width, y))
+        let p = fluid
+            .wall_pressure(Vec2::new(tank.width, y))
             .expect("water at the wall");
         let expected = 1000.0 * G * (depth - y);
         assert!(

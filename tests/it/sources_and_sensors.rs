@@ -7,11 +7,12 @@ use crate::common;
 
 use crate::common::{TICK, create_app, run, spawn};
 use bevy::ecs::message::Messages;
+use bevy::ecs::system::SystemState;
 use bevy::prelude::*;
-use bevy_sph2d::fluid::{FluidParticle, Solid, SolidShape, SphParams, SphSolver, SphStats, Tank};
+use bevy_sph2d::fluid::{FluidParticle, Solid, SolidShape, SphParams, SphStats, Tank};
 use bevy_sph2d::gameplay::{
-    EmitterRate, FluidBlock, FluidDrain, FluidEmitter, FluidEntered, FluidLeft, FluidRegion,
-    FluidSensor, probe,
+    EmitterRate, FluidBlock, FluidDrain, FluidEmitter, FluidEntered, FluidLeft, FluidQuery,
+    FluidRegion, FluidSensor,
 };
 
 const SPACING: f32 = 0.01;
@@ -230,7 +231,7 @@ fn sensor_reads_the_fill_of_a_resting_layer_and_messages_once_per_crossing() {
 }
 
 #[test]
-fn probe_reads_hydrostatic_pressure_and_nothing_outside() {
+fn the_fluid_query_reads_hydrostatic_pressure_and_nothing_outside() {
     let mut app = resting_layer();
     // Settled as in the physics tests' resting layer (1.5 s).
     run(&mut app, 75);
@@ -243,10 +244,11 @@ fn probe_reads_hydrostatic_pressure_and_nothing_outside() {
             .collect()
     };
     let floor = 1000.0 * 9.81 * 0.2;
-    let solver = app.world().resource::<SphSolver>();
+    let mut state = SystemState::<FluidQuery>::new(app.world_mut());
+    let fluid = state.get(app.world()).expect("the fluid is there");
     for depth in [0.05f32, 0.1, 0.15] {
         let at = Vec2::new(0.5, 0.2 - depth);
-        let sample = probe(solver, at).expect("inside the fluid");
+        let sample = fluid.sample(at).expect("inside the fluid");
         // What the particles around the point carry, and what the depth says (the wide tank
         // still sloshes a little after 1.5 s).
         let around: Vec<f32> = near
@@ -268,8 +270,20 @@ fn probe_reads_hydrostatic_pressure_and_nothing_outside() {
         assert!(sample.velocity.length() < 0.05, "{sample:?}");
         assert!((sample.coverage - 1.0).abs() < 0.1, "{sample:?}");
     }
-    assert_eq!(probe(solver, Vec2::new(0.5, 0.5)), None);
-    assert_eq!(probe(solver, Vec2::NAN), None);
+    assert_eq!(fluid.sample(Vec2::new(0.5, 0.5)), None);
+    assert_eq!(fluid.sample(Vec2::NAN), None);
+    // The particles in a region: exactly those whose positions lie in it.
+    let region = FluidRegion::rect(Vec2::new(0.3, 0.1), Vec2::new(0.05, 0.03));
+    let inside: Vec<Vec2> = fluid.particles_in(region).map(|(_, x)| x).collect();
+    let expected = near.iter().filter(|(x, _)| region.contains(*x)).count();
+    assert!(expected > 20, "{expected} particles in the region");
+    assert_eq!(inside.len(), expected);
+    assert!(
+        fluid
+            .particles_in(FluidRegion::circle(Vec2::new(0.5, 0.5), 0.05))
+            .next()
+            .is_none()
+    );
 }
 
 #[test]
