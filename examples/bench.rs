@@ -493,7 +493,7 @@ fn time_gravity(bodies: usize, steps: usize, threads: usize, params: GravityPara
         stats.nodes,
         stats.field_ms,
         1000.0 * seconds,
-        bevy_sph2d::gravity::simd_path(),
+        bevy_sph2d::simd_path(),
         multipole.label()
     );
     seconds

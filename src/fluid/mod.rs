@@ -23,8 +23,7 @@ pub use crate::sim::config::{DfsphSettings, PressureSolver, SphConstants};
 pub use crate::sim::dfsph::{DfsphReport, LARGEST_ERROR_RATIO, MAX_RELIEF_RATE, PRESSURE_ACCURACY};
 pub use crate::sim::grid::NeighborGrid;
 pub use crate::sim::kernels::{self, KernelKind};
-#[doc(hidden)]
-pub use crate::sim::parallel;
+pub use crate::sim::parallel::PARALLEL_SLOTS;
 pub use crate::sim::profile::{StageProfile, SubstepPart};
 pub use crate::sim::solid::{
     ADDED_MASS_RATIO, MovingSolid, Part, Pose, SolidLoad, SolidMotion, SolidShape,

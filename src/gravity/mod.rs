@@ -14,7 +14,6 @@ use bevy::ecs::intern::Interned;
 use bevy::ecs::schedule::ScheduleLabel;
 use bevy::prelude::*;
 
-pub use crate::sim::gravity::kernel::simd_path;
 pub use crate::sim::gravity::quadtree::{
     Field, FieldQuery, Multipole, Node, QuadTree, direct_field_at,
 };

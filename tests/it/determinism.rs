@@ -144,7 +144,7 @@ fn ecs_is_deterministic_across_thread_counts() {
 #[cfg(feature = "parallel")]
 fn ecs_is_deterministic_across_thread_counts_dfsph() {
     let p = dfsph_fine();
-    assert!(block(1).positions_for(&p).len() > bevy_sph2d::fluid::parallel::PARALLEL_SLOTS);
+    assert!(block(1).positions_for(&p).len() > bevy_sph2d::fluid::PARALLEL_SLOTS);
     ecs_across_thread_counts("dfsph-fine", p, 4);
 }
 
@@ -224,7 +224,7 @@ fn dfsph_slices_are_deterministic_across_thread_counts() {
     // Fine enough for the solver's passes to run in parallel chunks.
     let p = dfsph_fine();
     let positions = block(1).positions_for(&p);
-    assert!(positions.len() > bevy_sph2d::fluid::parallel::PARALLEL_SLOTS);
+    assert!(positions.len() > bevy_sph2d::fluid::PARALLEL_SLOTS);
     check_slices_across_thread_counts(&p, &positions, 5);
 }
 

@@ -17,7 +17,6 @@
 //! shared SIMD rule in `src/simd.rs`): reproducible on that kind of CPU, not bit for bit against
 //! an FMA CPU.
 
-pub use crate::sim::simd::simd_path;
 use crate::sim::simd::{Simd, mul_add, simd};
 use bevy::math::Vec2;
 
