@@ -5,10 +5,9 @@
 
 use bevy::prelude::*;
 use bevy::time::TimeUpdateStrategy;
-use bevy_sph2d::fluid::NeighborGrid;
-use bevy_sph2d::fluid::SliceFluid;
 use bevy_sph2d::fluid::{SphParams, SphPlugin, Tank};
 use bevy_sph2d::gameplay::FluidBlock;
+use bevy_sph2d::slices::{NeighborGrid, SliceFluid};
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use std::time::Duration;
 

@@ -31,12 +31,14 @@
 
 use bevy::prelude::*;
 use bevy::time::TimeUpdateStrategy;
-use bevy_sph2d::fluid::{DfsphSettings, MovingSolid, Pose, SliceFluid, SolidMotion, SphConstants};
-use bevy_sph2d::fluid::{PressureSolver, SphParams, SphSolver, StageProfile, SubstepPart, Tank};
+use bevy_sph2d::fluid::{DfsphSettings, Pose, PressureSolver, SphParams, SphSolver, Tank};
 use bevy_sph2d::gameplay::SCENARIO_TANK;
 use bevy_sph2d::gameplay::{FluidBlock, ScenarioKind, SphScenario};
 use bevy_sph2d::gravity::Multipole;
 use bevy_sph2d::prelude::*;
+use bevy_sph2d::slices::{
+    MovingSolid, SliceFluid, SolidMotion, SphConstants, StageProfile, SubstepPart,
+};
 use clap::error::ErrorKind;
 use clap::{CommandFactory, Parser, ValueEnum};
 use std::time::{Duration, Instant};

@@ -449,8 +449,9 @@ mod float {
         AngularVelocity, Collider, ColliderDensity, LinearVelocity, PhysicsPlugins, RigidBody,
     };
     use bevy::prelude::*;
-    use bevy_sph2d::fluid::{MovingSolid, Part, Pose, SolidMotion};
+    use bevy_sph2d::fluid::{Part, Pose};
     use bevy_sph2d::prelude::*;
+    use bevy_sph2d::slices::{MovingSolid, SolidMotion};
     use std::io::{BufWriter, Write};
 
     /// Adds avian and the coupling, removes the fluid particles where the body goes, and

@@ -59,8 +59,9 @@
 //! Every algorithm lives in a pure simulation core (private module `sim`: no ECS, nothing from
 //! the rest of the crate, checked by CI) that writes the order of a fluid sub-step once; the
 //! plugins are thin drivers of it. Its parts can be used on their own: the smoothing kernels
-//! ([`fluid::kernels`]), the cell-list neighbour search ([`fluid::NeighborGrid`]), the whole
-//! fluid on plain vectors ([`fluid::SliceFluid`], the core's second driver) and the quadtree
+//! ([`fluid::kernels`]), the cell-list neighbour search ([`slices::NeighborGrid`]), the whole
+//! fluid on plain vectors ([`slices::SliceFluid`], the core's second driver, with the core's
+//! own types in [`slices`]) and the quadtree
 //! ([`gravity::QuadTree`]); [`validation`] holds the Martin & Moyce data and the resting-layer
 //! checks run on it.
 
@@ -87,6 +88,7 @@ pub mod particle;
 pub mod render;
 mod schedule;
 mod sim;
+pub mod slices;
 pub mod validation;
 
 pub use control::{

@@ -3,9 +3,10 @@
 //! and a resting layer of any depth and spacing measured against hydrostatics. The physics tests
 //! assert on them and the `validate` example prints and charts them. No ECS: it runs on the plain-vector driver.
 
-use crate::fluid::{STANDARD_GRAVITY, SliceFluid, SphParams, Tank};
+use crate::fluid::{STANDARD_GRAVITY, SphParams, Tank};
 use crate::gameplay::FluidBlock;
 use crate::sim::density::max_length;
+use crate::slices::SliceFluid;
 
 /// Martin & Moyce (1952), Phil. Trans. R. Soc. A 244, fig. 3, a column of width `a` and height
 /// `2a` (n² = 2, a = 2.25 in): dimensionless time `t √(2g/a)` and surge front position `Z/a`.
@@ -245,7 +246,7 @@ impl DamBreakSettling {
 }
 
 /// A box released at the still-water level of a [`RestingLayer`], free to heave, sway and roll
-/// under gravity and the fluid's force and torque ([`MovingSolid::load`](crate::fluid::MovingSolid::load)), stepped with them
+/// under gravity and the fluid's force and torque ([`MovingSolid::load`](crate::slices::MovingSolid::load)), stepped with them
 /// once a tick (semi-implicit Euler, as a rigid-body engine would): Archimedes says it floats
 /// with its bottom `relative_density × height` under the water.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -288,7 +289,8 @@ impl FloatingBox {
         average: f64,
         tick: f64,
     ) -> Option<FloatReport> {
-        use crate::fluid::{MovingSolid, Pose, SolidMotion, SolidShape, coupled_acceleration};
+        use crate::fluid::{Pose, SolidShape, coupled_acceleration};
+        use crate::slices::{MovingSolid, SolidMotion};
         let params = self.layer.params(base);
         let c = params.constants().ok()?;
         let shape = SolidShape::rectangle(self.size.x, self.size.y);

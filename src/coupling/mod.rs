@@ -9,7 +9,7 @@
 //! with each body's pose and velocity as avian left them, and writes [`FluidForce`]; avian
 //! steps in `FixedPostUpdate` with that force applied (forces last one avian step). The
 //! exchange is explicit, once a tick, so a dynamic body is stepped with an added mass (see
-//! [`ADDED_MASS_RATIO`](crate::fluid::ADDED_MASS_RATIO)): avian is given the acceleration
+//! [`ADDED_MASS_RATIO`](crate::slices::ADDED_MASS_RATIO)): avian is given the acceleration
 //! `a − g` with `(m + mₐ) a = F + m g`, which rests where the fluid's force alone would hold it.
 //! Gravity is set in one place, `SphParams::gravity`: the plugin keeps avian's `Gravity` equal
 //! to it. Tank walls for avian are opt-in ([`FluidCouplingPlugin::with_tank_walls`]).

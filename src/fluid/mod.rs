@@ -18,20 +18,10 @@ use crate::schedule::{ParticleSchedulePlugin, ParticleSystems};
 
 pub use crate::schedule::{SphSubstep, SphSubstepSystems};
 pub use crate::sim::boundary::Tank;
-pub use crate::sim::clock::SubstepClock;
-pub use crate::sim::config::{DfsphSettings, PressureSolver, SphConstants};
-pub use crate::sim::dfsph::{DfsphReport, LARGEST_ERROR_RATIO, MAX_RELIEF_RATE, PRESSURE_ACCURACY};
-pub use crate::sim::grid::NeighborGrid;
+pub use crate::sim::config::{DfsphSettings, PressureSolver};
 pub use crate::sim::kernels::{self, KernelKind};
 pub use crate::sim::parallel::PARALLEL_SLOTS;
-pub use crate::sim::profile::{StageProfile, SubstepPart};
-pub use crate::sim::solid::{
-    ADDED_MASS_RATIO, MovingSolid, Part, Pose, SolidLoad, SolidMotion, SolidShape,
-    coupled_acceleration,
-};
-pub use crate::sim::step::WET_WEIGHT;
-pub use crate::sim::step::{Particles, SolverIterations};
-pub use crate::sim::world::SliceFluid;
+pub use crate::sim::solid::{Part, Pose, SolidShape, coupled_acceleration};
 pub use components::{Acceleration, Density, FluidParticle, Position, Pressure, Velocity};
 pub(crate) use components::{FluidIndex, Stiffness};
 pub(crate) use driver::SubstepHooks;
@@ -49,7 +39,7 @@ pub(crate) use stats::update_stats;
 /// SPH fluid, simulated in a fixed-step schedule ([`FixedUpdate`] by default) with a stable
 /// number of sub-steps per tick, incompressible through the divergence-free solver (DFSPH, the
 /// default) or weakly compressible (WCSPH); see [`PressureSolver`]. It drives the crate's pure
-/// simulation core, whose one sub-step order the plain-vector [`SliceFluid`] drives too.
+/// simulation core, whose one sub-step order the plain-vector [`SliceFluid`](crate::slices::SliceFluid) drives too.
 ///
 /// Spawn [`FluidParticle`]s (or queue a [`FluidBlock`](crate::gameplay::FluidBlock)) and tune
 /// [`SphParams`]; read [`SphStats`]. Add [`Solid`]s (still or moving) inside the tank.

@@ -5,9 +5,9 @@
 
 use crate::common::*;
 use bevy::prelude::*;
-use bevy_sph2d::fluid::SliceFluid;
 use bevy_sph2d::fluid::{PressureSolver, Solid, SolidShape, SolidVelocity, SphParams, Tank};
 use bevy_sph2d::gameplay::FluidBlock;
+use bevy_sph2d::slices::SliceFluid;
 
 fn params() -> SphParams {
     params_for(PressureSolver::Wcsph)

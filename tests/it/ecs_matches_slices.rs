@@ -2,12 +2,12 @@
 
 use crate::common::*;
 use bevy::prelude::*;
-use bevy_sph2d::fluid::SliceFluid;
 use bevy_sph2d::fluid::{
-    Acceleration, KernelKind, MovingSolid, Pose, PressureSolver, Solid, SolidMotion, SolidShape,
-    SphParams, SphSubstep, SphSubstepSystems, Tank,
+    Acceleration, KernelKind, Pose, PressureSolver, Solid, SolidShape, SphParams, SphSubstep,
+    SphSubstepSystems, Tank,
 };
 use bevy_sph2d::gameplay::FluidBlock;
+use bevy_sph2d::slices::{MovingSolid, SliceFluid, SolidMotion};
 
 fn check(kernel: KernelKind, base: SphParams) {
     check_driver(kernel, base, false);

@@ -3,10 +3,9 @@
 //! fluid exactly, and a still one leaves still water still.
 
 use bevy::math::Vec2;
-use bevy_sph2d::fluid::{
-    MovingSolid, PressureSolver, SliceFluid, SolidMotion, SolidShape, SphParams, Tank,
-};
+use bevy_sph2d::fluid::{PressureSolver, SolidShape, SphParams, Tank};
 use bevy_sph2d::gameplay::FluidBlock;
+use bevy_sph2d::slices::{MovingSolid, SliceFluid, SolidMotion};
 use bevy_sph2d::validation::{FloatingBox, RestingLayer};
 
 const TICK: f64 = 1.0 / 60.0;

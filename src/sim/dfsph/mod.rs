@@ -82,8 +82,6 @@ mod solids;
 mod solve;
 mod stages;
 
-pub use solve::{LARGEST_ERROR_RATIO, MAX_RELIEF_RATE};
-
 /// The density solve's largest error is held under this fraction of the displacement the
 /// largest acceleration `a` makes over a step, `a dt²/Δx` as a density change. A pressure
 /// error that pushes a whole column (a smooth error, the slowest for any solver) shows as a
