@@ -76,6 +76,11 @@ impl Plugin for FluidCouplingPlugin {
     /// The systems go in once every plugin is built, into the schedule the fluid steps in,
     /// whichever order the plugins came in.
     fn finish(&self, app: &mut App) {
+        if app.world().contains_resource::<CouplingSystems>() {
+            // `App::finish` called again by hand: the systems are in already.
+            return;
+        }
+        app.init_resource::<CouplingSystems>();
         if !app.is_plugin_added::<SphPlugin>() {
             error!(
                 "FluidCouplingPlugin: no fluid to couple with; add ParticlePlugins (or SphPlugin)"
@@ -193,6 +198,10 @@ fn tank_walls(
     }
 }
 
+/// Marks an app whose coupling systems were added.
+#[derive(Resource, Default)]
+struct CouplingSystems;
+
 /// Keeps avian's `Gravity` equal to the fluid's ([`SphParams::gravity`]), the one place
 /// gravity is set.
 fn share_gravity(
@@ -200,6 +209,10 @@ fn share_gravity(
     params: Res<SphParams>,
     gravity: Option<ResMut<avian::Gravity>>,
 ) {
+    if params.validate().is_err() {
+        // The fluid runs on its last valid parameters; so does avian.
+        return;
+    }
     match gravity {
         Some(mut gravity) => {
             if gravity.0 != params.gravity {

@@ -187,6 +187,8 @@ pub struct FluidSample {
 /// any point, the pressure it puts on a wall, the particles in a region. Read it after
 /// [`SphSystems::Simulate`](crate::fluid::SphSystems::Simulate) (in
 /// [`SphSystems::Finish`](crate::fluid::SphSystems::Finish) or later) for this tick's fluid.
+/// It reads the particles' `particle::Position`: a system that also writes them takes both
+/// in a `ParamSet`.
 ///
 /// ```
 /// # use bevy::prelude::*;

@@ -44,6 +44,9 @@ pub(super) struct SolidFill {
     wet: bool,
 }
 
+/// Solids the fills draw: without a sprite or mesh of their own (and not a fill).
+type DrawnSolid = (Without<SolidFill>, Without<Sprite>, Without<Mesh2d>);
+
 /// Solids new or reshaped this frame, without a sprite or mesh of their own.
 type NewUndrawnSolid = (Changed<Solid>, Without<Sprite>, Without<Mesh2d>);
 
@@ -88,10 +91,10 @@ pub(super) fn attach_fills(
 
 /// Follows each solid with its fills: the dry one at its pose, the wet one cut at the
 /// waterline its [`Submerged::fraction`] gives; hides them with [`ParticleView::fill_solids`]
-/// off, and despawns those whose solid is gone.
+/// off, and despawns those whose solid is gone or got a sprite or mesh of its own.
 pub(super) fn update_fills(
     view: Res<ParticleView>,
-    solids: Query<(&Solid, &Transform, &Submerged), Without<SolidFill>>,
+    solids: Query<(&Solid, &Transform, &Submerged), DrawnSolid>,
     mut fills: Query<(Entity, &SolidFill, &Mesh2d, &mut Transform, &mut Visibility)>,
     mut meshes: ResMut<Assets<Mesh>>,
     mut commands: Commands,
@@ -101,6 +104,10 @@ pub(super) fn update_fills(
             commands.entity(fill).despawn();
             continue;
         };
+        if !view.fill_solids {
+            visibility.set_if_neq(Visibility::Hidden);
+            continue;
+        }
         let shown = |on: bool| {
             if on {
                 Visibility::Inherited
@@ -109,7 +116,7 @@ pub(super) fn update_fills(
             }
         };
         if !of.wet {
-            visibility.set_if_neq(shown(view.fill_solids));
+            visibility.set_if_neq(Visibility::Inherited);
             let placed = Transform {
                 translation: pose.translation.truncate().extend(FILL_Z),
                 rotation: pose.rotation,
@@ -125,7 +132,7 @@ pub(super) fn update_fills(
                 polygons_mesh(parts.map(move |part| part.below(pose, level)))
             })
             .filter(|wet| wet.count_vertices() > 0);
-        visibility.set_if_neq(shown(view.fill_solids && wet.is_some()));
+        visibility.set_if_neq(shown(wet.is_some()));
         // An empty mesh upsets the renderer's allocator: a dry body keeps its last wet mesh,
         // hidden.
         if let (Some(wet), Some(mut mesh)) = (wet, meshes.get_mut(&mesh.0)) {

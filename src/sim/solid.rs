@@ -64,15 +64,20 @@ impl Part {
     }
 
     /// Whether every coordinate is finite and the part has an inside (but a segment): a
-    /// positive radius for a circle, a radius of zero or more for a capsule, a polygon of at
-    /// least three corners, convex, with positive area.
+    /// positive radius for a circle, a radius of zero or more for a capsule (zero only with two
+    /// distinct ends), a polygon of at least three corners, convex, with positive area.
     pub fn is_valid(&self) -> bool {
         match self {
             Self::Circle { center, radius } => {
                 center.is_finite() && radius.is_finite() && *radius > 0.0
             }
             Self::Capsule { start, end, radius } => {
-                start.is_finite() && end.is_finite() && radius.is_finite() && *radius >= 0.0
+                let extent = *radius > 0.0 || start != end;
+                start.is_finite()
+                    && end.is_finite()
+                    && radius.is_finite()
+                    && *radius >= 0.0
+                    && extent
             }
             Self::Polygon { vertices } => {
                 let n = vertices.len();
@@ -390,7 +395,9 @@ impl SolidShape {
     pub fn centroid(&self) -> Vec2 {
         let area = self.area();
         if area <= 0.0 {
-            return Vec2::ZERO;
+            // Segments alone: the mean of their midpoints.
+            let n = self.parts.len().max(1) as f32;
+            return self.parts.iter().map(Part::centroid).sum::<Vec2>() / n;
         }
         self.parts
             .iter()
@@ -816,6 +823,10 @@ mod tests {
             segment.parts[0].outline(0.01),
             vec![Vec2::ZERO, Vec2::new(0.0, 0.5)]
         );
+        // A segment's centre of mass is its middle; a point (no length, no radius) is refused.
+        let off = SolidShape::capsule(Vec2::X, Vec2::new(2.0, 0.0), 0.0);
+        assert_eq!(off.centroid(), Vec2::new(1.5, 0.0));
+        assert!(!SolidShape::capsule(Vec2::ONE, Vec2::ONE, 0.0).is_valid());
         // Sampled, this disc would need some 10¹² boundary particles: it does not fit.
         assert!(!SolidShape::circle(1.0e9).fits(0.01, 3));
         assert!(MovingSolid::new(SolidShape::circle(1.0e9), Vec2::ZERO, 0.01, 3).is_none());

@@ -211,8 +211,9 @@ fn a_crate_dropped_from_half_a_metre_splashes_and_settles() {
     assert!(all_finite(&states(&mut app)));
 }
 
-/// Gravity is set in one place: avian's follows `SphParams::gravity`, tilted or not. Tank walls
-/// for avian come only when asked for.
+/// Gravity is set in one place: avian's follows `SphParams::gravity`, tilted or not (not to a
+/// refused value). Tank walls for avian come only when asked for (and a second `App::finish`
+/// does no harm).
 #[test]
 fn avian_takes_the_fluids_gravity_and_tank_walls_are_opt_in() {
     let walls = |app: &mut App| {
@@ -226,6 +227,10 @@ fn avian_takes_the_fluids_gravity_and_tank_walls_are_opt_in() {
     app.world_mut().resource_mut::<SphParams>().gravity = tilted;
     run(&mut app, 1);
     assert_eq!(app.world().resource::<Gravity>().0, tilted);
+    // Refused parameters: the fluid keeps its last valid ones, and so does avian.
+    app.world_mut().resource_mut::<SphParams>().gravity = Vec2::NAN;
+    run(&mut app, 1);
+    assert_eq!(app.world().resource::<Gravity>().0, tilted);
 
     let mut bare = create_app(SphParams {
         tank: Some(Tank::new(0.8, 0.4)),
@@ -236,6 +241,7 @@ fn avian_takes_the_fluids_gravity_and_tank_walls_are_opt_in() {
         PhysicsPlugins::default(),
         FluidCouplingPlugin::default(),
     ));
+    bare.finish();
     bare.finish();
     bare.cleanup();
     run(&mut bare, 2);
