@@ -7,8 +7,10 @@
 //!
 //! `cargo run --example dam_break [-- PARTICLES]` (the dev profile is optimised)
 
+mod demo;
+
 use bevy::prelude::*;
-use bevy_sph2d::demo::SphDemoPlugin;
+use demo::SphDemoPlugin;
 
 fn main() {
     let particles = std::env::args()
@@ -17,7 +19,7 @@ fn main() {
         .unwrap_or(2500);
     App::new()
         .add_plugins((
-            bevy_sph2d::demo::window_plugins("bevy_sph2d: dam break"),
+            demo::window_plugins("bevy_sph2d: dam break"),
             SphDemoPlugin::dam_break(particles),
         ))
         .run();

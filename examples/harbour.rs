@@ -1,6 +1,6 @@
 //! A harbour: water in a tank with a wave-maker paddle at the left, and floating crates, a boat,
 //! a barrel and a stone of different densities, coupled two ways with avian2d rigid bodies (the
-//! water pushes them, they push the water). The app is `demo::HarbourDemoPlugin`.
+//! water pushes them, they push the water). The app is `demo::HarbourDemoPlugin` (`examples/demo/`).
 //!
 //! Keys: `Up`/`Down` lengthen or shorten the paddle's stroke, `Space` drops a new crate. The
 //! mouse tools and the panel work as in `dam_break` (the drag tool grabs a body); the "Bodies"
@@ -9,10 +9,12 @@
 //! `cargo run --example harbour` (a window), or `cargo run --example harbour -- --headless 20`
 //! to run 20 simulated seconds without one and print the speed relative to real time.
 
+mod demo;
+
 use bevy::prelude::*;
 use bevy::time::TimeUpdateStrategy;
-use bevy_sph2d::demo::{HarbourDemoPlugin, HarbourScene, harbour_params, window_plugins};
 use bevy_sph2d::prelude::*;
+use demo::{HarbourDemoPlugin, HarbourScene, harbour_params, window_plugins};
 use std::time::Instant;
 
 fn main() {

@@ -6,11 +6,13 @@
 //! `cargo run --example record_gif [-- --out assets/dam_break.gif --seconds 3 --fps 12]`. Needs a
 //! display (`xvfb-run -a -s "-screen 0 1280x800x24"` on a server).
 
+mod demo;
+
 use bevy::prelude::*;
 use bevy::render::view::screenshot::{Screenshot, ScreenshotCaptured};
-use bevy_sph2d::demo::SphDemoPlugin;
 use bevy_sph2d::panel::PanelState;
 use clap::Parser;
+use demo::SphDemoPlugin;
 use image::codecs::gif::{GifEncoder, Repeat};
 use std::path::PathBuf;
 
@@ -46,7 +48,7 @@ fn main() {
     let cli = Cli::parse();
     App::new()
         .add_plugins((
-            bevy_sph2d::demo::window_plugins("bevy_sph2d: recording"),
+            demo::window_plugins("bevy_sph2d: recording"),
             SphDemoPlugin::dam_break(cli.particles),
         ))
         .insert_resource(cli)

@@ -34,7 +34,7 @@
 //! - `ParticleUiPlugins` (features `render`, `egui`, on by default): a liquid view or sprites
 //!   tinted through a colour map (`render::ParticleRenderPlugin`), mouse and keyboard tools
 //!   (`interact::ParticleInteractPlugin`) and the egui tweak panel (`panel::ParticlePanelPlugin`);
-//!   `demo::SphDemoPlugin` is the `dam_break` example's whole app.
+//!   the examples' demo apps (`examples/demo/`) are built on these, as a game would be.
 //! - [`SimulationControl`] and [`ResetSimulation`]: pause, single-step and reset for every
 //!   simulation plugin.
 //! - [`ParamsError`], [`ParamsStatus`] and [`ParamTable`]: the one parameters pattern of
@@ -45,7 +45,7 @@
 //! | feature | default | what it brings |
 //! | --- | --- | --- |
 //! | `render` | yes | the liquid view, sprites, mouse and keyboard tools; a window through winit with X11 |
-//! | `egui` | yes | the tweak panel and the demo plugin (implies `render`) |
+//! | `egui` | yes | the tweak panel (implies `render`) |
 //! | `parallel` | yes | threads: Bevy's multi-threaded task pools and the crate's rayon pool for the passes over particles |
 //! | `wayland` | no | Wayland windows beside X11 (Bevy's `wayland`, implies `render`; building it needs `pkg-config` and `libwayland-dev`) |
 //!
@@ -73,8 +73,6 @@ mod compute;
 mod control;
 #[cfg(feature = "avian")]
 pub mod coupling;
-#[cfg(feature = "egui")]
-pub mod demo;
 pub mod fluid;
 pub mod gameplay;
 pub mod gravity;

@@ -12,18 +12,21 @@
 //! Needs an X display: CI runs it under `xvfb-run` (Mesa's lavapipe renders on the CPU). Without
 //! `DISPLAY` it prints why and passes. The screenshot is kept in the target's temp folder.
 
+#[path = "../examples/demo/mod.rs"]
+mod demo;
+
 use bevy::ecs::schedule::{LogLevel, ScheduleLabel};
 use bevy::prelude::*;
 use bevy::render::view::screenshot::{Screenshot, ScreenshotCaptured, save_to_disk};
 use bevy::window::PrimaryWindow;
 use bevy::winit::WinitPlugin;
 use bevy_sph2d::SphSubstep;
-use bevy_sph2d::demo::SphDemoPlugin;
 use bevy_sph2d::fluid::SphParams;
 use bevy_sph2d::fluid::{FluidParticle, Position, SphStats};
 use bevy_sph2d::gameplay::{ScenarioKind, SphScenario};
 use bevy_sph2d::interact::PointerSettings;
 use bevy_sph2d::render::{ParticleCamera, ParticleDraw, ParticleView};
+use demo::SphDemoPlugin;
 use std::process::Command;
 use std::sync::Mutex;
 

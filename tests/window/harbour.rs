@@ -5,9 +5,9 @@
 //! particle is inside a body, then takes a screenshot and checks it is not blank.
 
 use super::{COUNT_FOR, TIMEOUT};
+use crate::demo::{HARBOUR_DEPTH, HarbourDemoPlugin};
 use bevy::prelude::*;
 use bevy::render::view::screenshot::{Screenshot, ScreenshotCaptured, save_to_disk};
-use bevy_sph2d::demo::{HARBOUR_DEPTH, HarbourDemoPlugin};
 use bevy_sph2d::fluid::{FluidParticle, Position, Solid, SphParams, SphStats, Submerged};
 use std::sync::Mutex;
 

@@ -4,17 +4,17 @@
 //! [`HarbourScene`] (the scene alone, headless too).
 
 use super::MAX_FRAME_TIME;
-use crate::coupling::{FluidCoupled, FluidCouplingPlugin};
-use crate::fluid::{FluidForce, SphParams, SphPlugin, Submerged, Tank};
-use crate::gameplay::FluidBlock;
-use crate::render::{ParticleCamera, ParticleDraw, ParticleView, RenderMode};
-use crate::schedule::ParticleSystems;
-use crate::{ParticlePlugins, ParticleUiPlugins};
 use avian2d::prelude::{
     AngularVelocity, Collider, ColliderDensity, LinearVelocity, PhysicsPlugins, RigidBody,
 };
 use bevy::prelude::*;
 use bevy_egui::{EguiContexts, EguiPrimaryContextPass, egui};
+use bevy_sph2d::ParticleSystems;
+use bevy_sph2d::coupling::{FluidCoupled, FluidCouplingPlugin};
+use bevy_sph2d::fluid::{FluidForce, SphParams, SphPlugin, Submerged, Tank};
+use bevy_sph2d::gameplay::FluidBlock;
+use bevy_sph2d::render::{ParticleCamera, ParticleDraw, ParticleView, RenderMode};
+use bevy_sph2d::{ParticlePlugins, ParticleUiPlugins};
 
 /// The harbour's tank, m.
 pub const HARBOUR_TANK: Vec2 = Vec2::new(1.6, 0.8);

@@ -1,17 +1,22 @@
-//! Feature `egui`: the ready-made demo app behind the `dam_break` example (and its windowed
-//! test): a scenario in a tank, sprites, mouse tools and the panel. See [`SphDemoPlugin`]. With
-//! feature `avian`, the `harbour` example's app too (`HarbourDemoPlugin`).
+//! The examples' ready-made demo apps, shared by the `dam_break`, `record_gif` and `harbour`
+//! examples and the window test (`mod demo;`, or `#[path]` from `tests/`): a scenario in a
+//! tank, sprites, mouse tools and the panel (`SphDemoPlugin`), and with feature `avian` the
+//! harbour (`HarbourDemoPlugin`). Not part of the library: it is what a game built on the
+//! crate's public API looks like.
 
-use crate::control::ResetSimulation;
-use crate::fluid::{SphParams, SphPlugin};
-use crate::gameplay::{ScenarioKind, SphScenario};
-use crate::render::{ParticleCamera, ParticleDraw, ParticleView, RenderMode};
-use crate::{ParticlePlugins, ParticleUiPlugins};
+#![allow(dead_code, reason = "each example uses a different part")]
+
 use bevy::prelude::*;
+use bevy_sph2d::ResetSimulation;
+use bevy_sph2d::fluid::{SphParams, SphPlugin};
+use bevy_sph2d::gameplay::{ScenarioKind, SphScenario};
+use bevy_sph2d::render::{ParticleCamera, ParticleDraw, ParticleView, RenderMode};
+use bevy_sph2d::{ParticlePlugins, ParticleUiPlugins};
 
 #[cfg(feature = "avian")]
 mod harbour;
 #[cfg(feature = "avian")]
+#[allow(unused_imports, reason = "each example uses a different part")]
 pub use harbour::{
     HARBOUR_DEPTH, HARBOUR_TANK, HarbourDemoPlugin, HarbourScene, Paddle, PaddleStroke,
     harbour_params,
@@ -39,7 +44,7 @@ impl SphDemoPlugin {
 }
 
 /// `DefaultPlugins` for a demo window: a 1280 × 720 window titled `title`, and Bevy's compute
-/// pool on every core ([`task_pool_plugin`](crate::task_pool_plugin)).
+/// pool on every core ([`task_pool_plugin`](bevy_sph2d::task_pool_plugin)).
 pub fn window_plugins(title: &str) -> impl PluginGroup {
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
     DefaultPlugins
@@ -51,7 +56,7 @@ pub fn window_plugins(title: &str) -> impl PluginGroup {
             }),
             ..default()
         })
-        .set(crate::task_pool_plugin(threads))
+        .set(bevy_sph2d::task_pool_plugin(threads))
 }
 
 /// Water tuned for interactive use in the scenario tank (1.6 m × 0.9 m), on the default
@@ -64,7 +69,7 @@ pub fn window_plugins(title: &str) -> impl PluginGroup {
 ///   dropping frames (the panel shows the speed relative to real time).
 pub fn demo_params() -> SphParams {
     SphParams {
-        tank: Some(crate::gameplay::SCENARIO_TANK),
+        tank: Some(bevy_sph2d::gameplay::SCENARIO_TANK),
         speed_of_sound: 30.0,
         max_substeps: 40,
         ..SphParams::water()
