@@ -19,7 +19,7 @@ mod pointer;
 
 use crate::fluid::{
     FluidForce, Part, PressureSolver, Solid, SolidShape, SolidVelocity, SphParams, SphPlugin,
-    SphSystems, Tank, coupled_acceleration,
+    SphSolver, SphSystems, Tank, coupled_acceleration,
 };
 use crate::schedule::{ParticleSchedule, ParticleSystems};
 use avian2d::parry::shape::TypedShape;
@@ -99,11 +99,12 @@ impl Plugin for FluidCouplingPlugin {
         app.add_systems(
             schedule,
             (
-                (share_gravity, attach_solids, copy_velocities)
+                (attach_solids, copy_velocities)
                     .chain()
                     .in_set(ParticleSystems::Prepare)
                     .before(SphSystems::Prepare),
-                apply_fluid_forces
+                (share_gravity, apply_fluid_forces)
+                    .chain()
                     .in_set(ParticleSystems::Finish)
                     .after(SphSystems::Finish),
             ),
@@ -202,24 +203,22 @@ fn tank_walls(
 #[derive(Resource, Default)]
 struct CouplingSystems;
 
-/// Keeps avian's `Gravity` equal to the fluid's ([`SphParams::gravity`]), the one place
-/// gravity is set.
+/// Keeps avian's `Gravity` equal to the gravity the fluid stepped with this tick (from
+/// [`SphParams::gravity`], the one place gravity is set; a refused value never reaches the
+/// solver, so it never reaches avian), before avian's step.
 fn share_gravity(
     mut commands: Commands,
-    params: Res<SphParams>,
+    solver: Res<SphSolver>,
     gravity: Option<ResMut<avian::Gravity>>,
 ) {
-    if params.validate().is_err() {
-        // The fluid runs on its last valid parameters; so does avian.
-        return;
-    }
+    let fluid = solver.constants().gravity;
     match gravity {
         Some(mut gravity) => {
-            if gravity.0 != params.gravity {
-                gravity.0 = params.gravity;
+            if gravity.0 != fluid {
+                gravity.0 = fluid;
             }
         }
-        None => commands.insert_resource(avian::Gravity(params.gravity)),
+        None => commands.insert_resource(avian::Gravity(fluid)),
     }
 }
 
@@ -288,10 +287,11 @@ fn copy_velocities(
 /// Applies the fluid's force and torque to each dynamic coupled body, stepped with its added
 /// mass (see the module docs) and held to [`MAX_FLUID_ACCELERATION`].
 fn apply_fluid_forces(
-    gravity: Option<Res<avian::Gravity>>,
+    solver: Res<SphSolver>,
     mut bodies: Query<(&FluidForce, &avian::RigidBody, Inertia, avian::Forces), With<FluidCoupled>>,
 ) {
-    let g = gravity.map_or(Vec2::ZERO, |g| g.0);
+    // The gravity avian steps with (see `share_gravity`).
+    let g = solver.constants().gravity;
     for (fluid, body, (mass, inertia), mut forces) in &mut bodies {
         if !body.is_dynamic() {
             continue;
