@@ -108,13 +108,6 @@ pub(super) fn update_fills(
             visibility.set_if_neq(Visibility::Hidden);
             continue;
         }
-        let shown = |on: bool| {
-            if on {
-                Visibility::Inherited
-            } else {
-                Visibility::Hidden
-            }
-        };
         if !of.wet {
             visibility.set_if_neq(Visibility::Inherited);
             let placed = Transform {
@@ -132,7 +125,11 @@ pub(super) fn update_fills(
                 polygons_mesh(parts.map(move |part| part.below(pose, level)))
             })
             .filter(|wet| wet.count_vertices() > 0);
-        visibility.set_if_neq(shown(wet.is_some()));
+        visibility.set_if_neq(if wet.is_some() {
+            Visibility::Inherited
+        } else {
+            Visibility::Hidden
+        });
         // An empty mesh upsets the renderer's allocator: a dry body keeps its last wet mesh,
         // hidden.
         if let (Some(wet), Some(mut mesh)) = (wet, meshes.get_mut(&mesh.0)) {
