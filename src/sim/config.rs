@@ -126,7 +126,10 @@ pub struct DfsphSettings {
     pub warm_start: bool,
     /// Run each solve for exactly its most iterations, without the tolerance stops (a fixed
     /// cost per sub-step, for measuring what the rest of a sub-step costs and for solves whose
-    /// start is already close; a solve with nothing left to gain still stops).
+    /// start is already close; a solve with nothing left to gain still stops). The density
+    /// solve's iterations are then projected gradient steps, one pressure push and one
+    /// density-rate pass each, half what a bounded conjugate-gradient iteration that expands
+    /// costs (`docs/physics.md`, "Projected gradient steps under a fixed budget").
     pub fixed_budget: bool,
     /// Start the density solve from a pressure solved on a coarse grid under the particles
     /// (a MAC grid of two spacings a cell, a ghost-fluid free surface,
