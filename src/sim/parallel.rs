@@ -111,6 +111,39 @@ pub(crate) fn fold_slots<T: Send, R: Copy + Default + Send, P: Parallel>(
         .fold(R::default(), |total, job| add(total, job.2))
 }
 
+/// [`fold_slots`] over two arrays of the same length at once: `work(slot, &mut a[slot], &mut
+/// b[slot])`, in the same chunks and order.
+pub(crate) fn fold_slots2<A: Send, B: Send, R: Copy + Default + Send, P: Parallel>(
+    a: &mut [A],
+    b: &mut [B],
+    parallel: &P,
+    work: impl Fn(usize, &mut A, &mut B) -> R + Sync,
+    add: impl Fn(R, R) -> R + Sync,
+) -> R {
+    debug_assert_eq!(a.len(), b.len());
+    let n = a.len();
+    let chunks = a.chunks_mut(CHUNK).zip(b.chunks_mut(CHUNK)).enumerate();
+    if P::HERE {
+        return chunks.fold(R::default(), |total, (k, (a, b))| {
+            let slots = a.iter_mut().zip(b.iter_mut()).enumerate();
+            let chunk = slots.fold(R::default(), |sum, (i, (a, b))| {
+                add(sum, work(k * CHUNK + i, a, b))
+            });
+            add(total, chunk)
+        });
+    }
+    let mut jobs: Vec<_> = chunks
+        .map(|(k, (a, b))| (k * CHUNK, a, b, R::default()))
+        .collect();
+    run_jobs(parallel, n, &mut jobs, |(start, a, b, total)| {
+        for (k, (a, b)) in a.iter_mut().zip(b.iter_mut()).enumerate() {
+            *total = add(*total, work(*start + k, a, b));
+        }
+    });
+    jobs.iter()
+        .fold(R::default(), |total, job| add(total, job.3))
+}
+
 /// A chunk length that splits `len` items into about `pieces` chunks of at least `min` items.
 pub(crate) fn chunk_size(len: usize, pieces: usize, min: usize) -> usize {
     len.div_ceil(pieces.max(1)).max(min).max(1)

@@ -37,7 +37,7 @@
 use super::rows::Rows;
 use super::{Dfsph, SlotState, WALL_MIRROR, pressure_push};
 use crate::sim::config::DfsphSettings;
-use crate::sim::parallel::{Parallel, fold_slots};
+use crate::sim::parallel::{Parallel, fold_slots, fold_slots2};
 use crate::sim::simd::{Simd, simd};
 use bevy::math::Vec2;
 
@@ -165,6 +165,9 @@ struct Tally {
     chopped: f64,
     /// `φ̃ᵀφ`, the reduced free gradient against the free gradient, preconditioned.
     reduced_free: f64,
+    /// `gᵀp` of the next projected gradient step, where the pass set one
+    /// ([`Solve::projected_steps`]).
+    slope: f64,
 }
 
 impl Tally {
@@ -175,6 +178,7 @@ impl Tally {
             conjugate: self.conjugate + other.conjugate,
             chopped: self.chopped + other.chopped,
             reduced_free: self.reduced_free + other.reduced_free,
+            slope: self.slope + other.slope,
         }
     }
 }
@@ -225,16 +229,6 @@ struct Stop {
     budget: bool,
 }
 
-/// The particles a projected gradient step moves.
-#[derive(Clone, Copy)]
-enum Bound {
-    /// Those with pressure (MPRGP's expansion).
-    FreeSet,
-    /// Every particle the solve works on, compressed ones at zero pressure included (a
-    /// particle without neighbours has a zero inverse diagonal and stays at zero).
-    All,
-}
-
 /// The state of one solve, borrowed from [`Dfsph`] and its scratch.
 struct Solve<'a, P: Parallel> {
     rows: &'a Rows,
@@ -272,20 +266,21 @@ impl<P: Parallel> Solve<'_, P> {
 
     /// Moves along the direction by `step` (`κ ← max(κ − step p, 0)`, the velocities with the
     /// pushes of it, the errors by `step q` with `q = dt² D u`) and tallies the new state; the
-    /// conjugation sum is against `q`.
-    fn advance(&mut self, step: f32) -> Tally {
+    /// conjugation sum is against `q`. With `next`, sets the direction to the projected
+    /// gradient step of that length from the new state ([`projected`]) and tallies its slope.
+    fn advance(&mut self, step: f32, next: Option<f32>) -> Tally {
         let (rows, state, simd) = (self.rows, self.state, self.simd);
-        let (push, direction) = (&*self.push, &*self.direction);
+        let push = &*self.push;
         let (dt, expansion) = (self.dt, self.expansion);
-        fold_slots(
+        fold_slots2(
             self.unknowns,
+            self.direction,
             self.parallel,
-            |slot, x| {
-                if step != 0.0 {
+            |slot, x, p| {
+                let mut sums = if step != 0.0 {
                     let q = dt * dt * push_rate(rows, simd, &state[slot], slot, push);
-                    let p = direction[slot];
-                    if p != 0.0 {
-                        let kappa = x.kappa - step * p;
+                    if *p != 0.0 {
+                        let kappa = x.kappa - step * *p;
                         // The particle that limits a feasible step lands on the bound exactly.
                         x.kappa = if kappa <= 1e-6 * x.kappa { 0.0 } else { kappa };
                     }
@@ -294,7 +289,12 @@ impl<P: Parallel> Solve<'_, P> {
                     tally(x, q, expansion)
                 } else {
                     tally(x, 0.0, expansion)
+                };
+                if let Some(length) = next {
+                    *p = projected(x, length);
+                    sums.slope = (-x.error * *p) as f64;
                 }
+                sums
             },
             Tally::add,
         )
@@ -305,8 +305,15 @@ impl<P: Parallel> Solve<'_, P> {
     /// the stiffness `warm κ`, its errors from that velocity and its inverse diagonal `αᵢ/dt²`
     /// from `inv_dt_sq` (zero where the solve leaves the particle alone). Tallies them. The same
     /// state as a step of one along `p` from zero stiffness, in two passes over the neighbours
-    /// instead of three (the errors from the pushed velocities, not added to them).
-    fn start(&mut self, velocity: &[Vec2], (kappa, warm, inv_dt_sq): (&[f32], f32, f32)) -> Tally {
+    /// instead of three (the errors from the pushed velocities, not added to them). With
+    /// `next`, sets the direction to the first projected gradient step, as
+    /// [`advance`](Self::advance) does.
+    fn start(
+        &mut self,
+        velocity: &[Vec2],
+        (kappa, warm, inv_dt_sq): (&[f32], f32, f32),
+        next: Option<f32>,
+    ) -> Tally {
         let (rows, state, simd, dt) = (self.rows, self.state, self.simd, self.dt);
         let (target, expansion) = (self.target, self.expansion);
         let solves = |slot: usize| target.solves(&state[slot]);
@@ -323,7 +330,7 @@ impl<P: Parallel> Solve<'_, P> {
             |(), ()| (),
         );
         let direction = &*self.direction;
-        // The push scratch holds the pushed velocities until the first iteration's push.
+        // The push scratch holds the pushed velocities until the next push.
         fold_slots(
             self.push,
             self.parallel,
@@ -334,17 +341,18 @@ impl<P: Parallel> Solve<'_, P> {
             |(), ()| (),
         );
         let pushed = &*self.push;
-        fold_slots(
+        fold_slots2(
             self.unknowns,
+            self.direction,
             self.parallel,
-            |slot, x| {
+            |slot, x, p| {
                 let s = &state[slot];
                 let inverse_diagonal = if solves(slot) {
                     s.factor * inv_dt_sq
                 } else {
                     0.0
                 };
-                let kappa = -direction[slot];
+                let kappa = -*p;
                 *x = Unknown {
                     kappa: if kappa > 0.0 { kappa } else { 0.0 },
                     error: 0.0,
@@ -355,7 +363,12 @@ impl<P: Parallel> Solve<'_, P> {
                     let rate = density_rate(rows, simd, s, slot, pushed);
                     x.error = target.error(dt, rate, s);
                 }
-                tally(x, 0.0, expansion)
+                let mut sums = tally(x, 0.0, expansion);
+                if let Some(length) = next {
+                    *p = projected(x, length);
+                    sums.slope = (-x.error * *p) as f64;
+                }
+                sums
             },
             Tally::add,
         )
@@ -399,27 +412,21 @@ impl<P: Parallel> Solve<'_, P> {
         }
         let d = self.set_direction(Next::Chopped);
         let curvature = self.push_direction();
-        (d.slope > 0.0 && curvature > 0.0).then(|| self.advance((d.slope / curvature) as f32))
+        (d.slope > 0.0 && curvature > 0.0).then(|| self.advance((d.slope / curvature) as f32, None))
     }
 
-    /// A projected gradient step of `length`: sets the direction to `κ − max(κ − length M⁻¹g,
-    /// 0)` on the particles of `bound`, the change that [`advance`](Self::advance) by one makes,
-    /// and returns its slope `gᵀp`.
-    fn set_projection(&mut self, length: f32, bound: Bound) -> f64 {
+    /// The projected gradient step of an expansion: sets the direction to `κ − max(κ − ᾱ M⁻¹g,
+    /// 0)` on the free set, the change that [`advance`](Self::advance) by one makes.
+    fn set_projection(&mut self, length: f32) {
         let unknowns = &*self.unknowns;
         fold_slots(
             self.direction,
             self.parallel,
             |slot, p| {
                 let x = unknowns[slot];
-                *p = if x.free() || matches!(bound, Bound::All) {
-                    x.kappa - (x.kappa + length * x.inverse_diagonal * x.error).max(0.0)
-                } else {
-                    0.0
-                };
-                (-x.error * *p) as f64
+                *p = if x.free() { projected(&x, length) } else { 0.0 };
             },
-            |a, b| a + b,
+            |(), ()| (),
         )
     }
 
@@ -458,40 +465,54 @@ impl<P: Parallel> Solve<'_, P> {
             }
             let step = (d.slope / curvature) as f32;
             if step <= d.feasible_step {
-                tally = self.advance(step);
+                tally = self.advance(step, None);
                 next = Next::Conjugate((tally.conjugate / curvature) as f32);
             } else {
                 // Expansion: as far as feasible, then a projected gradient step.
-                self.advance(d.feasible_step);
-                self.set_projection(self.expansion, Bound::FreeSet);
+                self.advance(d.feasible_step, None);
+                self.set_projection(self.expansion);
                 self.push_direction();
-                tally = self.advance(1.0);
+                tally = self.advance(1.0, None);
                 next = Next::Free;
             }
         }
     }
 
-    /// `most` projected gradient steps from the tally of the start, each one push and one
-    /// density-rate pass: [`REACH`] times `ᾱ` along the preconditioned gradient over every
-    /// particle the solve works on (compressed ones at zero pressure included), projected onto
-    /// `κ ≥ 0` and cut short where the energy is lowest. Returns the iterations and the last
-    /// tally; stops early when a step has nothing to gain.
+    /// The length of a fixed budget's projected gradient steps, [`REACH`] times `ᾱ`.
+    fn reach(&self) -> f32 {
+        REACH * self.expansion
+    }
+
+    /// `most` projected gradient steps from the tally of the start (which set the first
+    /// direction), each one push and one density-rate pass: [`REACH`] times `ᾱ` along the
+    /// preconditioned gradient over every particle the solve works on (compressed ones at zero
+    /// pressure included), projected onto `κ ≥ 0` ([`projected`]) and cut short where the
+    /// energy is lowest. Returns the iterations and the last tally; stops early when a step has
+    /// nothing to gain.
     fn projected_steps(&mut self, mut tally: Tally, most: u32) -> (u32, Tally) {
         let mut iterations = 0u32;
         while iterations < most && tally.error_sum.is_finite() {
+            let curvature = self.push_direction();
+            if tally.slope <= 0.0 || curvature <= 0.0 {
+                break;
+            }
+            iterations += 1;
             // As far along the step as it lowers the energy (never past its end, where the
             // projection keeps every stiffness at or above zero): a clump of particles closer
             // than the lattice is stiffer than `1/ᾱ`.
-            let slope = self.set_projection(REACH * self.expansion, Bound::All);
-            let curvature = self.push_direction();
-            if slope <= 0.0 || curvature <= 0.0 {
-                break;
-            }
-            tally = self.advance((slope / curvature).min(1.0) as f32);
-            iterations += 1;
+            let step = (tally.slope / curvature).min(1.0) as f32;
+            let next = (iterations < most).then_some(self.reach());
+            tally = self.advance(step, next);
         }
         (iterations, tally)
     }
+}
+
+/// The change `κ − max(κ − length M⁻¹g, 0)` of a projected gradient step of `length` at a
+/// particle (zero for one the solve leaves alone, whose inverse diagonal is zero).
+#[inline]
+fn projected(x: &Unknown, length: f32) -> f32 {
+    x.kappa - (x.kappa + length * x.inverse_diagonal * x.error).max(0.0)
 }
 
 /// A particle's share of a [`Tally`]; `q` is `dt²Ap` of the direction just taken (zero when
@@ -515,6 +536,7 @@ fn tally(x: &Unknown, q: f32, expansion: f32) -> Tally {
             conjugate: (m * g * q) as f64,
             chopped: 0.0,
             reduced_free: reduced as f64,
+            slope: 0.0,
         }
     } else {
         let compression = (-g).max(0.0);
@@ -524,6 +546,7 @@ fn tally(x: &Unknown, q: f32, expansion: f32) -> Tally {
             conjugate: 0.0,
             chopped: (m * compression * compression) as f64,
             reduced_free: 0.0,
+            slope: 0.0,
         }
     }
 }
@@ -587,11 +610,13 @@ impl Dfsph {
             expansion,
             parallel,
         };
-        let tally = solve.start(&self.velocity, (&kappa[..], warm, inv_dt_sq));
+        let projected = settings.fixed_budget && matches!(target, Target::Density);
+        let first = projected.then(|| solve.reach());
+        let tally = solve.start(&self.velocity, (&kappa[..], warm, inv_dt_sq), first);
         // The divergence solve keeps MPRGP under a budget too: with projected gradient steps
         // alone (one or two), a resting layer 25 deep at 1 cm still moved at 1-2% of `√(gD)`
         // from 1.25 to 2 s, with MPRGP's one iteration at 0.3-1%.
-        let (iterations, tally) = if settings.fixed_budget && matches!(target, Target::Density) {
+        let (iterations, tally) = if projected {
             solve.projected_steps(tally, max_iterations)
         } else {
             let stop = Stop {
