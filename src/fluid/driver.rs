@@ -94,6 +94,19 @@ impl Parallel for Passes {
             Self::Here => Sequential.for_each(items, work),
         }
     }
+
+    fn join<A, B, RA, RB>(&self, a: A, b: B) -> (RA, RB)
+    where
+        A: FnOnce() -> RA + Send,
+        B: FnOnce() -> RB + Send,
+        RA: Send,
+        RB: Send,
+    {
+        match self {
+            Self::Region => Rayon.join(a, b),
+            Self::Here => Sequential.join(a, b),
+        }
+    }
 }
 
 /// Runs `work` over `n` particles in a [`compute::region`](crate::compute::region) from

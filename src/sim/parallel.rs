@@ -12,6 +12,17 @@ pub(crate) trait Parallel: Sync {
     /// Whether everything runs on the calling thread, known when compiling: the slot passes
     /// then fold their chunks in place, with no list of jobs to hand out.
     const HERE: bool = false;
+
+    /// Runs `a` and `b`, possibly at the same time, and returns both results.
+    fn join<A, B, RA, RB>(&self, a: A, b: B) -> (RA, RB)
+    where
+        A: FnOnce() -> RA + Send,
+        B: FnOnce() -> RB + Send,
+        RA: Send,
+        RB: Send,
+    {
+        (a(), b())
+    }
 }
 
 /// Runs everything on the calling thread.
@@ -37,7 +48,19 @@ impl Parallel for Rayon {
             items.iter_mut().for_each(work);
             return;
         }
-        items.par_iter_mut().for_each(&work);
+        // Every item a task of its own that an idle thread can take: split only as far as
+        // rayon's default, the other thread, busy elsewhere (`join`), found little left to take.
+        items.par_iter_mut().with_max_len(1).for_each(&work);
+    }
+
+    fn join<A, B, RA, RB>(&self, a: A, b: B) -> (RA, RB)
+    where
+        A: FnOnce() -> RA + Send,
+        B: FnOnce() -> RB + Send,
+        RA: Send,
+        RB: Send,
+    {
+        rayon::join(a, b)
     }
 }
 

@@ -15,16 +15,22 @@ impl PressureStages for Dfsph {
 
     /// Step 1: caches neighbours and gradients, sums densities and factors (warm-started from
     /// each particle's stiffness).
+    /// With the grid start, the grid's cells and equations are built beside it, from the
+    /// positions.
     fn density(&mut self, s: &mut Shared, particles: &Particles, parallel: &impl Parallel) {
         let c = s.constants;
         let (order, stiffness) = (s.snapshot.grid().order(), &particles.stiffness);
-        self.prepare(
-            &c,
-            &s.snapshot,
-            &s.walls,
-            |slot| stiffness[order[slot] as usize],
-            parallel,
-        );
+        let (fluid, walls) = (&s.snapshot, &s.walls);
+        let grid = c.dfsph.grid_start && !fluid.is_empty();
+        self.prepare_with_grid(&c, (fluid, walls), grid, parallel, |dfsph| {
+            dfsph.prepare(
+                &c,
+                fluid,
+                walls,
+                |slot| stiffness[order[slot] as usize],
+                parallel,
+            );
+        });
     }
 
     /// Step 2: makes the velocity field divergence-free.
@@ -82,8 +88,7 @@ impl PressureStages for Dfsph {
         self.report.grid_iterations = 0;
         if c.dfsph.grid_start && !self.is_empty() && dt > 0.0 {
             let first_of_tick = s.clock.substeps == 1;
-            let grid =
-                self.start_from_grid(&c, (&s.snapshot, &s.walls), (dt, first_of_tick), parallel);
+            let grid = self.start_from_grid(&c, (dt, first_of_tick), parallel);
             self.report.grid_iterations = grid.iterations;
         }
     }

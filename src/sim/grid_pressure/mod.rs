@@ -3,7 +3,8 @@
 //! not grow with the depth. Pure, no ECS; the DFSPH density solve starts from it
 //! ([`DfsphSettings::grid_start`](super::config::DfsphSettings::grid_start)).
 //!
-//! Each solve ([`GridPressure::solve`]):
+//! Each solve ([`GridPressure::prepare`], steps 1 and 2 and the equations of step 4 from the
+//! positions alone; then [`GridPressure::solve`] with the velocities):
 //! 1. A rectangle of square cells of [`GridPressureSettings::cell_ratio`] particle spacings
 //!    (fitted to a whole number across the tank's width, so its side walls lie on cell faces),
 //!    on a lattice fixed to the world's origin (the tank's inner corner), bounded to the
@@ -77,20 +78,15 @@ impl Default for GridPressureSettings {
     }
 }
 
-/// What one solve reads of the fluid.
+/// What one solve reads of the fluid besides its velocities: the grid's geometry.
 #[derive(Debug, Clone, Copy)]
 pub struct GridInput<'a> {
     /// Particle positions, m.
     pub positions: &'a [Vec2],
-    /// Particle velocities the pressure is to make divergence-free (predicted under every
-    /// other force), m/s.
-    pub velocities: &'a [Vec2],
     /// The particle spacing, m (a particle's volume is its square).
     pub spacing: f32,
     /// Rest density, kg/m³.
     pub rest_density: f32,
-    /// The step the pressure acts over, s.
-    pub dt: f32,
     /// Gravity, m/s² (the pressure's extension into solid cells).
     pub gravity: Vec2,
     /// The tank, if any: cells outside it are solid.
@@ -143,6 +139,8 @@ pub struct GridPressure {
     scratch: (Vec<bool>, Vec<usize>),
     /// `ρ₀ g`, Pa/m.
     weight: Vec2,
+    /// Whether [`prepare`](GridPressure::prepare) built a grid for the next solve.
+    prepared: bool,
     report: GridReport,
 }
 
@@ -161,28 +159,52 @@ impl GridPressure {
         self.report
     }
 
-    /// Solves the pressure that makes `input`'s velocities divergence-free (see the module
-    /// docs); `solid(x)` gives the velocity of the solid at `x`, if any, besides the tank.
-    pub fn solve(
+    /// Steps 1 and 2 and the equations of step 4, all that reads the positions alone: the
+    /// rectangle of cells over `input`'s particles, the solid cells (`solid(x)` gives the
+    /// velocity of the solid at `x`, if any, besides the tank), the fill, the fluid cells and
+    /// their equations with the multigrid's levels. Returns whether there is a grid (none for
+    /// no finite particle, or more than [`MAX_CELLS`]); [`solve`](Self::solve) then solves on
+    /// it. Runs beside other work (the neighbour pass) as the velocities are made.
+    pub fn prepare(
         &mut self,
         input: &GridInput,
         solid: impl Fn(Vec2) -> Option<Vec2> + Sync,
         parallel: &impl Parallel,
-    ) -> GridReport {
+    ) -> bool {
         self.report = GridReport::default();
         self.cell = cell_size(self.settings.cell_ratio * input.spacing, input.tank);
         self.weight = input.rest_density * input.gravity;
-        if !self.place(input) {
+        self.prepared = self.place(input);
+        if !self.prepared {
             self.equations = Laplacian::default();
             self.pressure.clear();
             self.extended.clear();
-            return self.report;
+            return false;
         }
         self.classify(input.tank, &solid, parallel);
-        self.splat(input, parallel);
-        self.assemble(input);
-        self.warm_start();
+        self.splat_fill(input, parallel);
+        self.assemble_equations();
         self.multigrid.rebuild(&self.equations);
+        true
+    }
+
+    /// Solves the pressure that makes `velocities` (the particles' of the `input` the grid was
+    /// [`prepare`](Self::prepare)d from, predicted under every other force, m/s)
+    /// divergence-free over a step of `dt` seconds (see the module docs). No pressure without a
+    /// prepared grid.
+    pub fn solve(
+        &mut self,
+        input: &GridInput,
+        velocities: &[Vec2],
+        dt: f32,
+        parallel: &impl Parallel,
+    ) -> GridReport {
+        if !core::mem::take(&mut self.prepared) {
+            return self.report;
+        }
+        self.splat_faces(input, velocities, parallel);
+        self.assemble_rhs(input.rest_density, dt);
+        self.warm_start();
         let result = self.pcg.solve(
             (&self.equations, &mut self.multigrid),
             &self.rhs,
@@ -194,8 +216,9 @@ impl GridPressure {
             parallel,
         );
         if result.relative_residual.is_nan() || result.relative_residual > 1.0 {
-            // Diverged (the equations are singular only in a sealed pocket, which `assemble`
-            // opens; this is the net under it): no pressure rather than a wrong one.
+            // Diverged (the equations are singular only in a sealed pocket, which
+            // `assemble_equations` opens; this is the net under it): no pressure rather than a
+            // wrong one.
             self.pressure.fill(0.0);
         }
         self.extend();
@@ -335,31 +358,29 @@ impl GridPressure {
         });
     }
 
-    /// Steps 2 and 3, the particles: each cell's fill (then fluid or air) and each face's
-    /// velocity.
-    fn splat(&mut self, input: &GridInput, parallel: &impl Parallel) {
+    /// Step 2, the particles' volumes: each cell's fill, then fluid (at least half full) or
+    /// air.
+    fn splat_fill(&mut self, input: &GridInput, parallel: &impl Parallel) {
+        let particles = splat_input(input, (self.first, self.cell), &self.equations);
+        splat::splat_fill(&particles, &mut self.bands, &mut self.fill, parallel);
+        for c in 0..self.equations.len() {
+            if self.equations.kind[c] != CellKind::Solid && self.fill[c] >= 0.5 {
+                self.equations.kind[c] = CellKind::Fluid;
+            }
+        }
+    }
+
+    /// Step 3, the particles' `velocities`: each face's, a solid's on its faces.
+    fn splat_faces(&mut self, input: &GridInput, velocities: &[Vec2], parallel: &impl Parallel) {
         let (nx, ny) = (self.equations.nx, self.equations.ny);
         let lattices = [(nx + 1, ny), (nx, ny + 1)];
         for (sums, (columns, rows)) in self.face_sums.iter_mut().zip(lattices) {
             sums.clear();
             sums.resize(columns * rows, [0.0; 2]);
         }
-        let particles = SplatInput {
-            positions: input.positions,
-            velocities: input.velocities,
-            cell: self.cell,
-            origin: self.first.as_vec2(),
-            size: (nx, ny),
-            kind: &self.equations.kind,
-            share: input.spacing * input.spacing / (self.cell * self.cell),
-        };
-        let sums = (&mut self.fill[..], &mut self.face_sums);
-        splat::splat(&particles, &mut self.bands, sums, parallel);
-        for c in 0..self.equations.len() {
-            if self.equations.kind[c] != CellKind::Solid && self.fill[c] >= 0.5 {
-                self.equations.kind[c] = CellKind::Fluid;
-            }
-        }
+        let particles = splat_input(input, (self.first, self.cell), &self.equations);
+        let sums = &mut self.face_sums;
+        splat::splat_faces(&particles, velocities, &mut self.bands, sums, parallel);
         for axis in 0..2 {
             let faces = &mut self.faces[axis];
             faces.clear();
@@ -390,16 +411,12 @@ impl GridPressure {
     }
 
     /// Step 4's equations: sealed pockets opened, each fluid cell's diagonal (its free-surface
-    /// fractions) and its right-hand side `−(ρ₀/dt) ∇·u`.
-    fn assemble(&mut self, input: &GridInput) {
+    /// fractions), the unknowns numbered.
+    fn assemble_equations(&mut self) {
         let e = &mut self.equations;
         let (reached, stack) = &mut self.scratch;
         e.open_sealed_pockets(reached, stack);
-        let cells = e.len();
-        self.rhs.clear();
-        self.rhs.resize(cells, 0.0);
-        let scale = -f64::from(input.rest_density / input.dt);
-        for c in 0..cells {
+        for c in 0..e.len() {
             if e.kind[c] != CellKind::Fluid {
                 continue;
             }
@@ -414,9 +431,22 @@ impl GridPressure {
                 };
             }
             e.diag[c] = diag * e.off;
-            self.rhs[c] = scale * f64::from(divergence(&self.faces, c, (e.nx, e.ny), self.cell));
         }
         e.number_unknowns();
+    }
+
+    /// Step 4's right-hand side: `−(ρ₀/dt) ∇·u` in each fluid cell, for a rest density
+    /// `rest_density` and a step of `dt`.
+    fn assemble_rhs(&mut self, rest_density: f32, dt: f32) {
+        let e = &self.equations;
+        let cells = e.len();
+        self.rhs.clear();
+        self.rhs.resize(cells, 0.0);
+        let scale = -f64::from(rest_density / dt);
+        for &c in &e.cells {
+            let c = c as usize;
+            self.rhs[c] = scale * f64::from(divergence(&self.faces, c, (e.nx, e.ny), self.cell));
+        }
     }
 
     /// Step 4's start: the last solve's pressure where the same lattice cell was fluid.
@@ -524,6 +554,23 @@ fn face_cells(
         (j > 0 && i < nx).then(|| (j - 1) * nx + i)
     };
     (lower, upper)
+}
+
+/// What the splat reads of `input`'s particles and of the rectangle from lattice index `first`
+/// of cells of side `cell` and kinds `equations.kind`.
+fn splat_input<'a>(
+    input: &GridInput<'a>,
+    (first, cell): (IVec2, f32),
+    equations: &'a Laplacian,
+) -> SplatInput<'a> {
+    SplatInput {
+        positions: input.positions,
+        cell,
+        origin: first.as_vec2(),
+        size: (equations.nx, equations.ny),
+        kind: &equations.kind,
+        share: input.spacing * input.spacing / (cell * cell),
+    }
 }
 
 /// `∇·u` of cell `c` from its four faces, 1/s.

@@ -1,5 +1,6 @@
-//! Steps 2 and 3 of a solve, the particles onto the grid: each cell's fill and each face's
-//! weighted velocity, splatted bilinearly, in parallel bands.
+//! Steps 2 and 3 of a solve, the particles onto the grid: each cell's fill ([`splat_fill`],
+//! from the positions alone) and each face's weighted velocity ([`splat_faces`]), splatted
+//! bilinearly, in parallel bands.
 //!
 //! The particles are split into runs of consecutive indices, a fixed number of them whatever the
 //! thread count ([`BANDS`]); each run is splatted into arrays of its own covering just the
@@ -23,8 +24,6 @@ const BAND_PARTICLES: usize = 256;
 pub(super) struct SplatInput<'a> {
     /// Particle positions, m.
     pub positions: &'a [Vec2],
-    /// Particle velocities, m/s.
-    pub velocities: &'a [Vec2],
     /// A cell's side, m.
     pub cell: f32,
     /// The lattice index of the rectangle's first cell.
@@ -43,6 +42,9 @@ pub(super) struct Band {
     particles: Range<usize>,
     /// The first lattice row the run touches.
     first_row: usize,
+    /// The lattice rows of faces normal to y the run touches from `first_row` on (cells and
+    /// faces normal to x: as many, within the rectangle).
+    rows: usize,
     /// The cells' fill, from `first_row` on.
     fill: Vec<f32>,
     /// Each face's weighted velocity sum and weight (normal to x, then to y), from `first_row`
@@ -50,13 +52,13 @@ pub(super) struct Band {
     face_sums: [Vec<[f32; 2]>; 2],
 }
 
-/// The cells' fill and the faces' weighted velocity sums of `input`'s particles, added into
-/// `fill` (cells) and `face_sums` (faces normal to x, `(nx + 1) ny`, then to y, `nx (ny + 1)`),
-/// which come in zeroed. `bands` keeps the runs' arrays from solve to solve.
-pub(super) fn splat(
+/// The cells' fill of `input`'s particles, added into `fill` (which comes in zeroed). `bands`
+/// keeps the runs' arrays from solve to solve, and the rows each run touches for
+/// [`splat_faces`] with the same particles.
+pub(super) fn splat_fill(
     input: &SplatInput,
     bands: &mut Vec<Band>,
-    (fill, face_sums): (&mut [f32], &mut [Vec<[f32; 2]>; 2]),
+    fill: &mut [f32],
     parallel: &impl Parallel,
 ) {
     let len = input.positions.len();
@@ -65,10 +67,26 @@ pub(super) fn splat(
     for (k, band) in bands.iter_mut().enumerate() {
         band.particles = k * size..((k + 1) * size).min(len);
     }
-    parallel.for_each(bands, |band| band.splat(input));
+    parallel.for_each(bands, |band| band.splat_fill(input));
     let nx = input.size.0;
     for band in bands.iter() {
         add_rows(fill, &band.fill, band.first_row * nx, |w, p| *w += p);
+    }
+}
+
+/// The faces' weighted velocity sums of the particles [`splat_fill`] splatted, with
+/// `velocities`, added into `face_sums` (faces normal to x, `(nx + 1) ny`, then to y,
+/// `nx (ny + 1)`, which come in zeroed).
+pub(super) fn splat_faces(
+    input: &SplatInput,
+    velocities: &[Vec2],
+    bands: &mut [Band],
+    face_sums: &mut [Vec<[f32; 2]>; 2],
+    parallel: &impl Parallel,
+) {
+    parallel.for_each(bands, |band| band.splat_faces(input, velocities));
+    let nx = input.size.0;
+    for band in bands.iter() {
         for (axis, sums) in face_sums.iter_mut().enumerate() {
             let columns = nx + usize::from(axis == 0);
             let part = &band.face_sums[axis];
@@ -88,50 +106,63 @@ fn add_rows<T: Copy>(whole: &mut [T], part: &[T], start: usize, add: impl Fn(&mu
 }
 
 impl Band {
-    /// Splats the run's particles into the band's own arrays.
-    fn splat(&mut self, input: &SplatInput) {
+    /// Finds the rows the run touches and splats its particles' volumes into the band's fill.
+    fn splat_fill(&mut self, input: &SplatInput) {
         let (nx, ny) = input.size;
-        let run = self.particles.clone();
-        let (positions, velocities) = (&input.positions[run.clone()], &input.velocities[run]);
-        let lattice = |x: Vec2| x / input.cell - input.origin;
+        let positions = &input.positions[self.particles.clone()];
         // The rows touched: from the cell centres' lattice below the lowest particle to the
         // faces' above the highest.
         let (mut low, mut high) = (f32::MAX, f32::MIN);
-        for (&x, &v) in positions.iter().zip(velocities) {
-            if x.is_finite() && v.is_finite() {
-                let y = lattice(x).y;
-                (low, high) = (low.min(y), high.max(y));
-            }
+        for x in positions.iter().filter(|x| x.is_finite()) {
+            let y = input.lattice(*x).y;
+            (low, high) = (low.min(y), high.max(y));
         }
         let first = (low - 0.5).floor().clamp(0.0, ny as f32 - 1.0);
         let last = (high.floor() + 1.0).clamp(first, ny as f32);
         self.first_row = if low <= high { first as usize } else { 0 };
-        let rows = if low <= high {
+        self.rows = if low <= high {
             last as usize - self.first_row + 1
         } else {
             0
         };
-        // Cells and faces normal to x have `ny` rows, faces normal to y `ny + 1`.
-        let cell_rows = rows.min(ny - self.first_row);
-        let lattices = [(nx + 1, cell_rows), (nx, rows)];
+        let cell_rows = self.cell_rows(ny);
         self.fill.clear();
         self.fill.resize(nx * cell_rows, 0.0);
+        if self.rows == 0 {
+            return;
+        }
+        let kind = &input.kind[self.first_row * nx..];
+        let offset = Vec2::new(0.0, self.first_row as f32);
+        for &x in positions.iter().filter(|x| x.is_finite()) {
+            let g = input.lattice(x) - offset;
+            if !self.fill_inside(g, input, cell_rows) {
+                spread_volume(&mut self.fill, kind, (nx, cell_rows), g, input.share);
+            }
+        }
+    }
+
+    /// Splats the run's particles' `velocities` into the band's face sums, over the rows
+    /// [`splat_fill`](Self::splat_fill) found.
+    fn splat_faces(&mut self, input: &SplatInput, velocities: &[Vec2]) {
+        let (nx, ny) = input.size;
+        let run = self.particles.clone();
+        let (positions, velocities) = (&input.positions[run.clone()], &velocities[run]);
+        // Cells and faces normal to x have `ny` rows, faces normal to y `ny + 1`.
+        let lattices = [(nx + 1, self.cell_rows(ny)), (nx, self.rows)];
         for (sums, (columns, rows)) in self.face_sums.iter_mut().zip(lattices) {
             sums.clear();
             sums.resize(columns * rows, [0.0; 2]);
         }
-        if rows == 0 {
+        if self.rows == 0 {
             return;
         }
-        let kind = &input.kind[self.first_row * nx..];
         let offset = Vec2::new(0.0, self.first_row as f32);
         for (&x, &v) in positions.iter().zip(velocities) {
             if !(x.is_finite() && v.is_finite()) {
                 continue;
             }
-            let g = lattice(x) - offset;
-            if !self.splat_inside(g, v, input, (cell_rows, rows)) {
-                spread_volume(&mut self.fill, kind, (nx, cell_rows), g, input.share);
+            let g = input.lattice(x) - offset;
+            if !self.faces_inside(g, v, input, lattices) {
                 for (axis, sums) in self.face_sums.iter_mut().enumerate() {
                     // Faces normal to x lie half a cell up from the lattice points, those
                     // normal to y half a cell right.
@@ -145,52 +176,70 @@ impl Band {
         }
     }
 
-    /// The splat of one particle at lattice point `g` (the band's rows) with velocity `v`
-    /// where all its cells and faces lie on the band and none of its cells is solid, the
+    /// The rows of cells (and faces normal to x) the run touches, within the rectangle's `ny`.
+    fn cell_rows(&self, ny: usize) -> usize {
+        self.rows.min(ny - self.first_row.min(ny))
+    }
+
+    /// The fill of one particle at lattice point `g` (the band's rows) where its four cells lie
+    /// on the band and none is solid, the common case, in straight-line code; `false` (and
+    /// nothing done) otherwise.
+    #[inline]
+    fn fill_inside(&mut self, g: Vec2, input: &SplatInput, cell_rows: usize) -> bool {
+        let nx = input.size.0;
+        // The cell centres' lattice point below and left of `g − ½`.
+        let centre = floor(g - Vec2::splat(0.5));
+        let inside = centre.x >= 0.0
+            && centre.y >= 0.0
+            && centre.x + 1.0 < nx as f32
+            && centre.y + 1.0 < cell_rows as f32;
+        if !inside {
+            return false;
+        }
+        let c = centre.y as usize * nx + centre.x as usize;
+        let kind = &input.kind[(self.first_row * nx)..];
+        if [c, c + 1, c + nx, c + nx + 1]
+            .iter()
+            .any(|&c| kind[c] == CellKind::Solid)
+        {
+            return false;
+        }
+        let h = g - Vec2::splat(0.5) - centre;
+        // Side by side along a row, two cells are added at once.
+        let [w00, w10, w01, w11] = weights(h, h).map(|w| w * input.share);
+        add_at(&mut self.fill, c, [w00, w10]);
+        add_at(&mut self.fill, c + nx, [w01, w11]);
+        true
+    }
+
+    /// The face sums of one particle at lattice point `g` (the band's rows) with velocity `v`
+    /// where all its faces lie on the band's `lattices` (faces normal to x, then to y), the
     /// common case, in straight-line code; `false` (and nothing done) otherwise.
     #[inline]
-    fn splat_inside(
+    fn faces_inside(
         &mut self,
         g: Vec2,
         v: Vec2,
         input: &SplatInput,
-        (cell_rows, face_rows): (usize, usize),
+        lattices: [(usize, usize); 2],
     ) -> bool {
         let nx = input.size.0;
         // The lattice points below and left of `g` (faces) and of `g − ½` (cell centres).
         let (point, centre) = (floor(g), floor(g - Vec2::splat(0.5)));
         let inside = centre.x >= 0.0
             && centre.y >= 0.0
-            && point.x + 1.0 <= nx as f32
-            && centre.x + 1.0 < nx as f32
-            && centre.y + 1.0 < cell_rows as f32
-            && point.y + 1.0 < face_rows as f32;
+            && point.x + 1.0 < lattices[0].0 as f32
+            && centre.y + 1.0 < lattices[0].1 as f32
+            && centre.x + 1.0 < lattices[1].0 as f32
+            && point.y + 1.0 < lattices[1].1 as f32;
         if !inside {
             return false;
         }
         let (f, h) = (g - point, g - Vec2::splat(0.5) - centre);
         let (i, j) = (point.x as usize, point.y as usize);
         let (ci, cj) = (centre.x as usize, centre.y as usize);
-        let c = cj * nx + ci;
-        let kind = &input.kind[(self.first_row * nx)..];
-        let cells = [c, c + 1, c + nx, c + nx + 1];
-        if cells.iter().any(|&c| kind[c] == CellKind::Solid) {
-            return false;
-        }
-        let weights = |a: Vec2, b: Vec2| {
-            [
-                (1.0 - a.x) * (1.0 - b.y),
-                a.x * (1.0 - b.y),
-                (1.0 - a.x) * b.y,
-                a.x * b.y,
-            ]
-        };
-        // Side by side along a row, two cells (and their two faces' sums and weights) are
-        // added at once.
-        let [w00, w10, w01, w11] = weights(h, h).map(|w| w * input.share);
-        add_at(&mut self.fill, c, [w00, w10]);
-        add_at(&mut self.fill, c + nx, [w01, w11]);
-        // Faces normal to x: columns at the lattice points, rows at the centres'.
+        // Side by side along a row, two faces' sums and weights are added at once. Faces normal
+        // to x: columns at the lattice points, rows at the centres'.
         let u = cj * (nx + 1) + i;
         let sums = self.face_sums[0].as_flattened_mut();
         let [w00, w10, w01, w11] = weights(f, h);
@@ -204,6 +253,26 @@ impl Band {
         add_at(sums, 2 * (u + nx), [w01 * v.y, w01, w11 * v.y, w11]);
         true
     }
+}
+
+impl SplatInput<'_> {
+    /// `x` in lattice coordinates of the rectangle: cells from its first.
+    #[inline]
+    fn lattice(&self, x: Vec2) -> Vec2 {
+        x / self.cell - self.origin
+    }
+}
+
+/// The bilinear weights of the four points about a lattice point (that point, right, up,
+/// up-right), the fractions across from `a.x` and up from `b.y`.
+#[inline]
+fn weights(a: Vec2, b: Vec2) -> [f32; 4] {
+    [
+        (1.0 - a.x) * (1.0 - b.y),
+        a.x * (1.0 - b.y),
+        (1.0 - a.x) * b.y,
+        a.x * b.y,
+    ]
 }
 
 /// Adds `add` to the `N` values from `at` on.
@@ -364,16 +433,17 @@ mod tests {
     /// The splat's sums: the fill, then the face sums.
     type Sums = (Vec<f32>, [Vec<[f32; 2]>; 2]);
 
-    fn run(input: &SplatInput, parallel: &impl Parallel, one_band: bool) -> Sums {
+    fn run(input: &SplatInput, velocities: &[Vec2], parallel: &impl Parallel, one: bool) -> Sums {
         let (nx, ny) = input.size;
         let mut fill = vec![0.0; nx * ny];
         let mut faces = [vec![[0.0; 2]; (nx + 1) * ny], vec![[0.0; 2]; nx * (ny + 1)]];
-        if one_band {
+        if one {
             let mut band = Band {
                 particles: 0..input.positions.len(),
                 ..Band::default()
             };
-            band.splat(input);
+            band.splat_fill(input);
+            band.splat_faces(input, velocities);
             let first = band.first_row;
             for (w, &p) in fill[first * nx..].iter_mut().zip(&band.fill) {
                 *w += p;
@@ -385,7 +455,9 @@ mod tests {
                 }
             }
         } else {
-            splat(input, &mut Vec::new(), (&mut fill, &mut faces), parallel);
+            let mut bands = Vec::new();
+            splat_fill(input, &mut bands, &mut fill, parallel);
+            splat_faces(input, velocities, &mut bands, &mut faces, parallel);
         }
         (fill, faces)
     }
@@ -404,20 +476,19 @@ mod tests {
     fn bands_match_one(positions: &[Vec2], velocities: &[Vec2], kind: &[CellKind]) {
         let input = SplatInput {
             positions,
-            velocities,
             cell: 1.0,
             origin: Vec2::ZERO,
             size: (20, 12),
             kind,
             share: 0.25,
         };
-        let whole = run(&input, &Sequential, true);
-        let one = run(&input, &Sequential, false);
+        let whole = run(&input, velocities, &Sequential, true);
+        let one = run(&input, velocities, &Sequential, false);
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(3)
             .build()
             .unwrap();
-        let several = pool.install(|| run(&input, &Rayon, false));
+        let several = pool.install(|| run(&input, velocities, &Rayon, false));
         assert_eq!(one, several, "the sums depend on the thread count");
         let close = |a: f32, b: f32| (a - b).abs() <= 1e-4 * (1.0 + a.abs());
         assert!(one.0.iter().zip(&whole.0).all(|(&a, &b)| close(a, b)));

@@ -24,16 +24,32 @@ fn block(x0: f32, width: f32, height: f32) -> Vec<Vec2> {
         .collect()
 }
 
-fn input<'a>(positions: &'a [Vec2], velocities: &'a [Vec2], tank: Tank) -> GridInput<'a> {
-    GridInput {
+/// The grid's input and the particles' velocities.
+struct Input<'a> {
+    grid: GridInput<'a>,
+    velocities: &'a [Vec2],
+}
+
+fn input<'a>(positions: &'a [Vec2], velocities: &'a [Vec2], tank: Tank) -> Input<'a> {
+    let grid = GridInput {
         positions,
-        velocities,
         spacing: SPACING,
         rest_density: RHO,
-        dt: DT,
         gravity: Vec2::new(0.0, -G),
         tank: Some(tank),
-    }
+    };
+    Input { grid, velocities }
+}
+
+/// Prepares `grid` on `input`'s particles and solves for their velocities over [`DT`].
+fn solve(
+    grid: &mut GridPressure,
+    input: &Input,
+    solid: impl Fn(Vec2) -> Option<Vec2> + Sync,
+    parallel: &impl Parallel,
+) -> GridReport {
+    grid.prepare(&input.grid, solid, parallel);
+    grid.solve(&input.grid, input.velocities, DT, parallel)
 }
 
 /// The still column's predicted velocities: one step of gravity.
@@ -48,7 +64,8 @@ fn still_column(depth: f32, per_cell: bool) -> (GridPressure, f32) {
     let positions = block(0.0, 0.4, depth);
     let velocities = fallen(&positions);
     let mut grid = GridPressure::new(GridPressureSettings::default());
-    let report = grid.solve(
+    let report = solve(
+        &mut grid,
         &input(&positions, &velocities, Tank::new(0.4, 0.5)),
         |_| None,
         &Sequential,
@@ -101,7 +118,12 @@ fn the_cells_fit_the_tank_width_and_a_still_column_stays_level() {
     let velocities = fallen(&positions);
     let mut grid = GridPressure::new(GridPressureSettings::default());
     let tank = Tank::new(0.41, 0.5);
-    grid.solve(&input(&positions, &velocities, tank), |_| None, &Sequential);
+    solve(
+        &mut grid,
+        &input(&positions, &velocities, tank),
+        |_| None,
+        &Sequential,
+    );
     assert!((grid.cell - 0.41 / 21.0).abs() < 1e-6, "{} m", grid.cell);
     assert_eq!(cell_size(0.02, None), 0.02);
     // Every row of fluid cells at one pressure, the last column against the wall included.
@@ -189,7 +211,8 @@ fn moving_disc(x: Vec2) -> Option<Vec2> {
 fn the_projected_velocity_is_divergence_free_with_walls_a_surface_and_a_moving_solid() {
     let (positions, velocities) = moving_block();
     let mut grid = GridPressure::new(GridPressureSettings::default());
-    let report = grid.solve(
+    let report = solve(
+        &mut grid,
         &input(&positions, &velocities, Tank::new(0.8, 0.5)),
         moving_disc,
         &Sequential,
@@ -226,13 +249,19 @@ fn the_disc_s_velocity_is_felt_by_the_pressure() {
     still.settings = GridPressureSettings::default();
     moving.settings = GridPressureSettings::default();
     let disc = |v: Vec2| move |x: Vec2| (x.distance(Vec2::new(0.2, 0.15)) < 0.05).then_some(v);
-    still.solve(
+    solve(
+        &mut still,
         &input(&positions, &velocities, tank),
         disc(Vec2::ZERO),
         &Sequential,
     );
     let up = Vec2::new(0.0, 0.2);
-    moving.solve(&input(&positions, &velocities, tank), disc(up), &Sequential);
+    solve(
+        &mut moving,
+        &input(&positions, &velocities, tank),
+        disc(up),
+        &Sequential,
+    );
     // A disc rising pushes the water above it and draws the water below.
     let (above, below) = (Vec2::new(0.2, 0.23), Vec2::new(0.2, 0.07));
     assert!(moving.pressure_at(above) > still.pressure_at(above) + 50.0);
@@ -254,7 +283,8 @@ fn a_pocket_sealed_by_a_solid_is_left_to_the_particles() {
         .collect();
     let velocities = fallen(&positions);
     let mut grid = GridPressure::new(GridPressureSettings::default());
-    let report = grid.solve(
+    let report = solve(
+        &mut grid,
         &input(&positions, &velocities, Tank::new(0.4, 0.5)),
         arch,
         &Sequential,
@@ -357,7 +387,8 @@ fn the_pressure_is_the_same_on_any_number_of_threads() {
         ..GridPressureSettings::default()
     });
     let mut two = one.clone();
-    one.solve(
+    solve(
+        &mut one,
         &input(&positions, &velocities, tank),
         moving_disc,
         &Sequential,
@@ -366,7 +397,14 @@ fn the_pressure_is_the_same_on_any_number_of_threads() {
         .num_threads(2)
         .build()
         .unwrap();
-    pool.install(|| two.solve(&input(&positions, &velocities, tank), moving_disc, &Rayon));
+    pool.install(|| {
+        solve(
+            &mut two,
+            &input(&positions, &velocities, tank),
+            moving_disc,
+            &Rayon,
+        )
+    });
     // Enough cells that the cell passes run in parallel chunks.
     assert!(
         one.report().fluid_cells > PARALLEL_SLOTS,
@@ -384,10 +422,25 @@ fn the_last_pressure_starts_the_next_solve_unless_forgotten() {
     let velocities = fallen(&positions);
     let tank = Tank::new(0.4, 0.5);
     let mut grid = GridPressure::new(GridPressureSettings::default());
-    let cold = grid.solve(&input(&positions, &velocities, tank), |_| None, &Sequential);
-    let warm = grid.solve(&input(&positions, &velocities, tank), |_| None, &Sequential);
+    let cold = solve(
+        &mut grid,
+        &input(&positions, &velocities, tank),
+        |_| None,
+        &Sequential,
+    );
+    let warm = solve(
+        &mut grid,
+        &input(&positions, &velocities, tank),
+        |_| None,
+        &Sequential,
+    );
     grid.forget();
-    let forgotten = grid.solve(&input(&positions, &velocities, tank), |_| None, &Sequential);
+    let forgotten = solve(
+        &mut grid,
+        &input(&positions, &velocities, tank),
+        |_| None,
+        &Sequential,
+    );
     assert!(cold.iterations >= 3, "{cold:?}");
     assert!(warm.iterations <= 1, "{warm:?}");
     assert_eq!(forgotten, cold);
@@ -397,7 +450,7 @@ fn the_last_pressure_starts_the_next_solve_unless_forgotten() {
 fn no_particles_or_broken_ones_give_no_grid_and_no_pressure() {
     let mut grid = GridPressure::default();
     let tank = Tank::new(0.4, 0.5);
-    let report = grid.solve(&input(&[], &[], tank), |_| None, &Sequential);
+    let report = solve(&mut grid, &input(&[], &[], tank), |_| None, &Sequential);
     assert_eq!(report.cells, 0);
     assert_eq!(grid.pressure_at(Vec2::new(0.1, 0.1)), 0.0);
     let mut positions = block(0.0, 0.4, 0.1);
@@ -406,7 +459,12 @@ fn no_particles_or_broken_ones_give_no_grid_and_no_pressure() {
     let mut velocities = fallen(&positions);
     velocities[5] = Vec2::new(f32::INFINITY, 0.0);
     grid = GridPressure::new(GridPressureSettings::default());
-    let report = grid.solve(&input(&positions, &velocities, tank), |_| None, &Sequential);
+    let report = solve(
+        &mut grid,
+        &input(&positions, &velocities, tank),
+        |_| None,
+        &Sequential,
+    );
     assert!(report.cells > 0 && report.cells <= 22 * 27, "{report:?}");
     let p = grid.pressure_at(Vec2::new(0.2, 0.01));
     assert!(p.is_finite() && p > 0.5 * RHO * G * 0.1, "{p}");
