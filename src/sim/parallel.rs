@@ -48,8 +48,8 @@ impl Parallel for Rayon {
             items.iter_mut().for_each(work);
             return;
         }
-        // Every item a task of its own that an idle thread can take: split only as far as
-        // rayon's default, the other thread, busy elsewhere (`join`), found little left to take.
+        // One task per item, so that an idle thread can take any: with rayon's default split,
+        // the other thread, busy in a `join`, found little left to take.
         items.par_iter_mut().with_max_len(1).for_each(&work);
     }
 

@@ -131,7 +131,7 @@ impl Dfsph {
     /// from zero: a tick then depends on the particles alone, so a run restored from a snapshot
     /// or reset between ticks repeats bit for bit. (Starting it from the particles' warm starts
     /// instead, averaged onto the cells, stopped the solve short on a biased start: a layer 100
-    /// deep at 2 cm read a slope of 0.944.) The grid is the one [`Dfsph::prepare_grid`] built
+    /// deep at 2 cm read a slope of 0.944.) The grid is the one [`Dfsph::prepare_with_grid`] built
     /// for this sub-step's particles. Returns what the grid's solve did.
     pub fn start_from_grid(
         &mut self,
@@ -142,6 +142,14 @@ impl Dfsph {
         let GridStart { grid, positions } = &mut self.grid_start;
         if first_of_tick {
             grid.forget();
+        }
+        if positions.len() != self.state.len() {
+            // Not prepared for these particles (the density stage ran without the grid).
+            debug_assert!(
+                false,
+                "the grid was not prepared for this sub-step's particles"
+            );
+            return GridReport::default();
         }
         let input = grid_input(c, positions);
         let report = grid.solve(&input, &self.velocity, dt, parallel);

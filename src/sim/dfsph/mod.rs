@@ -7,7 +7,9 @@
 //! 1. [`Dfsph::prepare`]: from the sorted snapshot, each particle's fluid neighbours with their
 //!    volume-weighted kernel gradients `gᵢⱼ = s V ∇Wᵢⱼ` (cached: every solver iteration reuses
 //!    them), the summed wall gradient, the density `ρ̂ᵢ = ρᵢ/ρ₀` by summation over fluid and
-//!    wall particles, and the DFSPH factor `αᵢ = 1/(|Σⱼ gᵢⱼ + 2 g_wall,ᵢ|² + Σⱼ |gᵢⱼ|²)`.
+//!    wall particles, and the DFSPH factor `αᵢ = 1/(|Σⱼ gᵢⱼ + 2 g_wall,ᵢ|² + Σⱼ |gᵢⱼ|²)`. With
+//!    the grid start, the coarse grid's cells and equations are built beside it from the
+//!    positions ([`Dfsph::start_from_grid`] solves on them in step 4).
 //! 2. [`Dfsph::solve_divergence`]: the stiffness `κᵛ` that cancels the density change rate
 //!    `Dρ̂ᵢ/Dt = Σⱼ gᵢⱼ·(vᵢ − vⱼ) + 2 g_wall,ᵢ·vᵢ` of the current velocities (walls mirror the
 //!    particle's velocity; particles with a deficient neighbourhood,
@@ -34,7 +36,9 @@
 //! The solves ([`solve`]) are a bound-constrained, Jacobi-preconditioned conjugate gradient
 //! (MPRGP) on those symmetric equations with the stiffness kept non-negative (pressure pushes,
 //! never pulls: a particle that is not compressed relaxes to zero pressure instead of holding
-//! the last sub-step's). They stop once the mean error is under the settings' tolerance and the
+//! the last sub-step's). Under a fixed budget the density solve takes projected gradient steps
+//! instead, half the cost of MPRGP's expanding iterations (see [`solve`]). They stop once the
+//! mean error is under the settings' tolerance and the
 //! largest under [`LARGEST_ERROR_RATIO`] times it, for the density solve also under
 //! [`PRESSURE_ACCURACY`] of what the largest acceleration moves in a step (a smooth pressure
 //! error hides from a density tolerance in deep water). The stiffness is a pressure per rest

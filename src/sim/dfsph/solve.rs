@@ -291,8 +291,7 @@ impl<P: Parallel> Solve<'_, P> {
                     tally(x, 0.0, expansion)
                 };
                 if let Some(length) = next {
-                    *p = projected(x, length);
-                    sums.slope = (-x.error * *p) as f64;
+                    (*p, sums.slope) = next_step(x, length);
                 }
                 sums
             },
@@ -314,14 +313,19 @@ impl<P: Parallel> Solve<'_, P> {
         (kappa, warm, inv_dt_sq): (&[f32], f32, f32),
         next: Option<f32>,
     ) -> Tally {
-        let (rows, state, simd, dt) = (self.rows, self.state, self.simd, self.dt);
-        let (target, expansion) = (self.target, self.expansion);
-        let solves = |slot: usize| target.solves(&state[slot]);
+        self.set_warm_direction(kappa, warm);
+        self.push_warm(velocity);
+        self.set_unknowns(inv_dt_sq, next)
+    }
+
+    /// The warm start's direction `p = −warm κ` on the particles the solve works on.
+    fn set_warm_direction(&mut self, kappa: &[f32], warm: f32) {
+        let (state, target) = (self.state, self.target);
         fold_slots(
             self.direction,
             self.parallel,
             |slot, p| {
-                *p = if solves(slot) {
+                *p = if target.solves(&state[slot]) {
                     -warm * kappa[slot].max(0.0)
                 } else {
                     0.0
@@ -329,8 +333,13 @@ impl<P: Parallel> Solve<'_, P> {
             },
             |(), ()| (),
         );
+    }
+
+    /// The velocities under the warm start's push, `velocity + dt Dᵀp`, into the push scratch
+    /// (which holds them until the next push).
+    fn push_warm(&mut self, velocity: &[Vec2]) {
+        let (rows, state, simd, dt) = (self.rows, self.state, self.simd, self.dt);
         let direction = &*self.direction;
-        // The push scratch holds the pushed velocities until the next push.
         fold_slots(
             self.push,
             self.parallel,
@@ -340,14 +349,20 @@ impl<P: Parallel> Solve<'_, P> {
             },
             |(), ()| (),
         );
-        let pushed = &*self.push;
+    }
+
+    /// Every unknown from the warm start's direction and pushed velocities (see
+    /// [`start`](Self::start)), tallied; with `next`, the first projected step's direction.
+    fn set_unknowns(&mut self, inv_dt_sq: f32, next: Option<f32>) -> Tally {
+        let (rows, state, simd, dt) = (self.rows, self.state, self.simd, self.dt);
+        let (target, expansion, pushed) = (self.target, self.expansion, &*self.push);
         fold_slots2(
             self.unknowns,
             self.direction,
             self.parallel,
             |slot, x, p| {
                 let s = &state[slot];
-                let inverse_diagonal = if solves(slot) {
+                let inverse_diagonal = if target.solves(s) {
                     s.factor * inv_dt_sq
                 } else {
                     0.0
@@ -365,8 +380,7 @@ impl<P: Parallel> Solve<'_, P> {
                 }
                 let mut sums = tally(x, 0.0, expansion);
                 if let Some(length) = next {
-                    *p = projected(x, length);
-                    sums.slope = (-x.error * *p) as f64;
+                    (*p, sums.slope) = next_step(x, length);
                 }
                 sums
             },
@@ -491,9 +505,9 @@ impl<P: Parallel> Solve<'_, P> {
     /// nothing to gain.
     fn projected_steps(&mut self, mut tally: Tally, most: u32) -> (u32, Tally) {
         let mut iterations = 0u32;
-        while iterations < most && tally.error_sum.is_finite() {
+        while iterations < most && tally.error_sum.is_finite() && tally.slope > 0.0 {
             let curvature = self.push_direction();
-            if tally.slope <= 0.0 || curvature <= 0.0 {
+            if curvature.is_nan() || curvature <= 0.0 {
                 break;
             }
             iterations += 1;
@@ -513,6 +527,18 @@ impl<P: Parallel> Solve<'_, P> {
 #[inline]
 fn projected(x: &Unknown, length: f32) -> f32 {
     x.kappa - (x.kappa + length * x.inverse_diagonal * x.error).max(0.0)
+}
+
+/// A particle's direction of the next projected gradient step of `length` and its share of the
+/// slope `gᵀp`: none for a particle the solve leaves alone (whatever error it carries).
+#[inline]
+fn next_step(x: &Unknown, length: f32) -> (f32, f64) {
+    if x.inverse_diagonal > 0.0 {
+        let p = projected(x, length);
+        (p, (-x.error * p) as f64)
+    } else {
+        (0.0, 0.0)
+    }
 }
 
 /// A particle's share of a [`Tally`]; `q` is `dt²Ap` of the direction just taken (zero when
@@ -571,9 +597,10 @@ fn density_rate(rows: &Rows, simd: Simd, s: &SlotState, slot: usize, u: &[Vec2])
 }
 
 impl Dfsph {
-    /// MPRGP on the DFSPH pressure equations of `target` (see the module docs), from the
-    /// target's stiffness of the last sub-step (warm start) or zero. Returns the iterations and
-    /// the mean error left.
+    /// MPRGP on the DFSPH pressure equations of `target` (see the module docs), or under a
+    /// fixed budget for the density, projected gradient steps ([`Solve::projected_steps`]),
+    /// from the target's stiffness of the last sub-step (warm start) or zero. Returns the
+    /// iterations and the mean error left.
     pub(super) fn solve(
         &mut self,
         dt: f32,
@@ -611,7 +638,7 @@ impl Dfsph {
             parallel,
         };
         let projected = settings.fixed_budget && matches!(target, Target::Density);
-        let first = projected.then(|| solve.reach());
+        let first = (projected && max_iterations > 0).then(|| solve.reach());
         let tally = solve.start(&self.velocity, (&kappa[..], warm, inv_dt_sq), first);
         // The divergence solve keeps MPRGP under a budget too: with projected gradient steps
         // alone (one or two), a resting layer 25 deep at 1 cm still moved at 1-2% of `√(gD)`

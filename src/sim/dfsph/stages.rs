@@ -15,6 +15,7 @@ impl PressureStages for Dfsph {
 
     /// Step 1: caches neighbours and gradients, sums densities and factors (warm-started from
     /// each particle's stiffness).
+    ///
     /// With the grid start, the grid's cells and equations are built beside it, from the
     /// positions.
     fn density(&mut self, s: &mut Shared, particles: &Particles, parallel: &impl Parallel) {

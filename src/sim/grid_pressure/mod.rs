@@ -190,8 +190,9 @@ impl GridPressure {
 
     /// Solves the pressure that makes `velocities` (the particles' of the `input` the grid was
     /// [`prepare`](Self::prepare)d from, predicted under every other force, m/s)
-    /// divergence-free over a step of `dt` seconds (see the module docs). No pressure without a
-    /// prepared grid.
+    /// divergence-free over a step of `dt` seconds (see the module docs). Each solve needs a
+    /// [`prepare`](Self::prepare) of its own: without one there is no pressure (it reads zero
+    /// everywhere).
     pub fn solve(
         &mut self,
         input: &GridInput,
@@ -200,6 +201,9 @@ impl GridPressure {
         parallel: &impl Parallel,
     ) -> GridReport {
         if !core::mem::take(&mut self.prepared) {
+            self.pressure.clear();
+            self.extended.clear();
+            self.report = GridReport::default();
             return self.report;
         }
         self.splat_faces(input, velocities, parallel);

@@ -30,7 +30,8 @@ pub(super) struct SplatInput<'a> {
     pub origin: Vec2,
     /// The rectangle's cells across and up.
     pub size: (usize, usize),
-    /// The cells' kinds (solid cells set), row by row.
+    /// The cells' kinds, row by row: [`splat_fill`] keeps a particle's volume off the solid
+    /// ones (the face pass reads none).
     pub kind: &'a [CellKind],
     /// A particle's volume as a share of a cell.
     pub share: f32,
@@ -52,9 +53,10 @@ pub(super) struct Band {
     face_sums: [Vec<[f32; 2]>; 2],
 }
 
-/// The cells' fill of `input`'s particles, added into `fill` (which comes in zeroed). `bands`
-/// keeps the runs' arrays from solve to solve, and the rows each run touches for
-/// [`splat_faces`] with the same particles.
+/// The cells' fill of `input`'s particles, added into `fill` (which comes in zeroed): every
+/// particle at a finite position counts, whatever its velocity (the face pass skips one whose
+/// velocity is not finite). `bands` keeps the runs' arrays from solve to solve, and the rows
+/// each run touches for [`splat_faces`] with the same particles.
 pub(super) fn splat_fill(
     input: &SplatInput,
     bands: &mut Vec<Band>,
