@@ -137,9 +137,7 @@ impl Band {
         let offset = Vec2::new(0.0, self.first_row as f32);
         for &x in positions.iter().filter(|x| x.is_finite()) {
             let g = input.lattice(x) - offset;
-            if !self.fill_inside(g, input, cell_rows) {
-                spread_volume(&mut self.fill, kind, (nx, cell_rows), g, input.share);
-            }
+            spread_volume(&mut self.fill, kind, (nx, cell_rows), g, input.share);
         }
     }
 
@@ -181,37 +179,6 @@ impl Band {
     /// The rows of cells (and faces normal to x) the run touches, within the rectangle's `ny`.
     fn cell_rows(&self, ny: usize) -> usize {
         self.rows.min(ny - self.first_row.min(ny))
-    }
-
-    /// The fill of one particle at lattice point `g` (the band's rows) where its four cells lie
-    /// on the band and none is solid, the common case, in straight-line code; `false` (and
-    /// nothing done) otherwise.
-    #[inline]
-    fn fill_inside(&mut self, g: Vec2, input: &SplatInput, cell_rows: usize) -> bool {
-        let nx = input.size.0;
-        // The cell centres' lattice point below and left of `g − ½`.
-        let centre = floor(g - Vec2::splat(0.5));
-        let inside = centre.x >= 0.0
-            && centre.y >= 0.0
-            && centre.x + 1.0 < nx as f32
-            && centre.y + 1.0 < cell_rows as f32;
-        if !inside {
-            return false;
-        }
-        let c = centre.y as usize * nx + centre.x as usize;
-        let kind = &input.kind[(self.first_row * nx)..];
-        if [c, c + 1, c + nx, c + nx + 1]
-            .iter()
-            .any(|&c| kind[c] == CellKind::Solid)
-        {
-            return false;
-        }
-        let h = g - Vec2::splat(0.5) - centre;
-        // Side by side along a row, two cells are added at once.
-        let [w00, w10, w01, w11] = weights(h, h).map(|w| w * input.share);
-        add_at(&mut self.fill, c, [w00, w10]);
-        add_at(&mut self.fill, c + nx, [w01, w11]);
-        true
     }
 
     /// The face sums of one particle at lattice point `g` (the band's rows) with velocity `v`
@@ -374,15 +341,7 @@ fn stencil(g: Vec2, (columns, rows): (usize, usize)) -> Option<(usize, [f32; 4])
     }
     let f = g - base;
     let c = base.y as usize * columns + base.x as usize;
-    Some((
-        c,
-        [
-            (1.0 - f.x) * (1.0 - f.y),
-            f.x * (1.0 - f.y),
-            (1.0 - f.x) * f.y,
-            f.x * f.y,
-        ],
-    ))
+    Some((c, weights(f, f)))
 }
 
 /// [`bilinear`] over all four points, `None` for those off the lattice.
