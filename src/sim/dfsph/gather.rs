@@ -5,7 +5,8 @@
 
 use super::rows::RowsMut;
 use super::{
-    DEFICIENT_NEIGHBORHOOD, Dfsph, SlotState, WALL_MIRROR, lattice_neighbors, wall_weight,
+    DEFICIENT_NEIGHBORHOOD, Dfsph, PINNED_DIAGONAL, SlotState, WALL_MIRROR, lattice_diagonal,
+    lattice_neighbors, wall_weight,
 };
 use crate::sim::config::SphConstants;
 use crate::sim::kernels::RadialKernel;
@@ -94,6 +95,7 @@ impl Dfsph {
             gravity: c.gravity,
         };
         let deficient_below = DEFICIENT_NEIGHBORHOOD * lattice_neighbors(c) as f32;
+        let pinned_below = PINNED_DIAGONAL * lattice_diagonal(g, c);
         let starts = self
             .velocity
             .chunks_mut(CHUNK)
@@ -144,7 +146,7 @@ impl Dfsph {
                     *state = SlotState {
                         count: len.min(stride) as u32,
                         density,
-                        factor: if diagonal > 1e-6 / c.support_sq {
+                        factor: if diagonal > pinned_below {
                             1.0 / diagonal
                         } else {
                             0.0

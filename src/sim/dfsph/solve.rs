@@ -73,8 +73,8 @@ pub(super) enum Target {
 }
 
 impl Target {
-    /// Whether the solve gives the particle a stiffness: not without neighbours (a zero factor),
-    /// and not in the divergence solve for a deficient neighbourhood, which keeps splashes and the
+    /// Whether the solve gives the particle a stiffness: not without neighbours or when pinned
+    /// (a zero factor, [`PINNED_DIAGONAL`](super::PINNED_DIAGONAL)), and not in the divergence solve for a deficient neighbourhood, which keeps splashes and the
     /// free surface from being pinned.
     #[inline]
     fn solves(self, s: &SlotState) -> bool {
