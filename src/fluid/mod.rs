@@ -21,7 +21,7 @@ pub use crate::sim::boundary::Tank;
 pub use crate::sim::config::{DfsphSettings, PressureSolver};
 pub use crate::sim::kernels::{self, KernelKind};
 pub use crate::sim::parallel::PARALLEL_SLOTS;
-pub use crate::sim::solid::{Part, Pose, SolidShape, coupled_acceleration};
+pub use crate::sim::solid::{Part, Pose, SolidResponse, SolidShape, coupled_acceleration};
 pub use components::{Acceleration, Density, FluidParticle, Position, Pressure, Velocity};
 pub(crate) use components::{FluidIndex, Stiffness};
 pub(crate) use driver::SubstepHooks;
@@ -31,8 +31,8 @@ pub use params::{SphParams, SphParamsError};
 pub use resources::{SphParamsStatus, SphSolver, SphStats};
 pub(crate) use solids::pose_of;
 pub use solids::{
-    FluidForce, SOLID_ENTER_FRACTION, SOLID_LEAVE_FRACTION, Solid, SolidEntered, SolidLeft,
-    SolidVelocity, Submerged,
+    FluidForce, SOLID_ENTER_FRACTION, SOLID_LEAVE_FRACTION, Solid, SolidDynamics, SolidEntered,
+    SolidLeft, SolidVelocity, Submerged,
 };
 pub(crate) use stats::update_stats;
 
@@ -148,6 +148,7 @@ impl Plugin for SphPlugin {
             .register_type::<FluidIndex>()
             .register_type::<Solid>()
             .register_type::<SolidVelocity>()
+            .register_type::<SolidDynamics>()
             .register_type::<FluidForce>()
             .register_type::<Submerged>()
             .add_message::<SolidEntered>()

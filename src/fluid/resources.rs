@@ -56,6 +56,14 @@ impl SphSolver {
         self.step.constants()
     }
 
+    /// Where the last tick left the [`Solid`](super::Solid) of entity `solid`: its pose and
+    /// velocities after the sub-steps (a body with [`SolidDynamics`](super::SolidDynamics) has
+    /// answered the fluid's force on the way); `None` if the fluid holds no such solid.
+    pub fn solid_motion(&self, solid: Entity) -> Option<crate::sim::solid::SolidMotion> {
+        let k = self.solids.position(solid)?;
+        self.step.solids().get(k).map(|s| s.motion())
+    }
+
     /// Switches on the [`StageProfile`] of the sub-steps (each part's wall time from now on),
     /// or off with `None`.
     pub fn set_stage_profile(&mut self, profile: Option<StageProfile>) {

@@ -5,7 +5,7 @@
 //! on them summed pair by pair from what they do to the fluid.
 
 use super::resources::SphSolver;
-use crate::sim::solid::{MovingSolid, Pose, SolidMotion, SolidShape};
+use crate::sim::solid::{MovingSolid, Pose, SolidMotion, SolidResponse, SolidShape};
 use bevy::prelude::*;
 
 /// A rigid solid in the fluid. Its shape is in the entity's own frame; each tick it takes its
@@ -50,6 +50,14 @@ pub struct SolidVelocity {
     /// Angular velocity, rad/s.
     pub angular: f32,
 }
+
+/// Makes a [`Solid`] a body that the fluid's force moves within a tick, as the rigid-body step
+/// that moves it afterwards will ([`SolidResponse`]: its mass, gravity and the acceleration of
+/// its contacts); set it again each tick. Without it the solid keeps its [`SolidVelocity`]
+/// through the tick. The `avian` coupling sets it on dynamic bodies.
+#[derive(Component, Reflect, Debug, Clone, Copy, Default, PartialEq)]
+#[reflect(Component, Debug, Default, PartialEq)]
+pub struct SolidDynamics(pub SolidResponse);
 
 /// The fluid's force on a [`Solid`] over the last tick (pressure and viscosity, summed from
 /// the pairs of its boundary particles with the fluid, averaged over the sub-steps), and its
@@ -117,6 +125,13 @@ pub(crate) struct SolidIndex {
     previous: Vec<Pose>,
 }
 
+impl SolidIndex {
+    /// The fluid's index of the solid of `entity`.
+    pub(crate) fn position(&self, entity: Entity) -> Option<usize> {
+        self.entities.iter().position(|&e| e == entity)
+    }
+}
+
 /// The pose of a solid's `Transform`.
 pub(crate) fn pose_of(transform: &Transform) -> Pose {
     Pose {
@@ -130,6 +145,7 @@ type SolidItem<'a> = (
     Ref<'a, Solid>,
     &'a Transform,
     Option<&'a SolidVelocity>,
+    Option<&'a SolidDynamics>,
 );
 
 /// Hands the solids to the fluid: re-samples them when one was added, removed or changed (or
@@ -159,8 +175,8 @@ pub(crate) fn sync_solids(
     }
     let dt = time.delta_secs();
     let index = &mut solver.solids;
-    for (entity, solid, transform, velocity) in &solids {
-        let Some(k) = index.entities.iter().position(|&e| e == entity) else {
+    for (entity, solid, transform, velocity, dynamics) in &solids {
+        let Some(k) = index.position(entity) else {
             continue;
         };
         let (pose, previous) = (pose_of(transform), index.previous[k]);
@@ -184,6 +200,9 @@ pub(crate) fn sync_solids(
         if !solver.step.set_solid_motion(k, motion) {
             warn!("solid {entity}: its pose or velocity is not finite; it stays where it was");
         }
+        if !solver.step.set_solid_response(k, dynamics.map(|d| d.0)) {
+            warn!("solid {entity}: its dynamics are not finite; it keeps its velocity");
+        }
     }
 }
 
@@ -198,7 +217,7 @@ fn resample(
     index.previous.clear();
     let moving = step.solids_mut();
     moving.clear();
-    for (entity, solid, transform, _) in solids.iter() {
+    for (entity, solid, transform, ..) in solids.iter() {
         match MovingSolid::new(solid.shape.clone(), solid.center_of_mass, spacing, layers) {
             Some(sampled) => {
                 moving.push(sampled);

@@ -486,6 +486,37 @@ pub struct SolidLoad {
     pub submerged_fraction: f32,
 }
 
+/// How a solid that a rigid-body step moves (a dynamic body) answers the fluid within a tick:
+/// after each sub-step its velocities take the sub-step's fluid force and torque as the body's
+/// step will, `(m + mₐ) a = F + m g` ([`coupled_acceleration`]), plus the acceleration its
+/// contacts gave it over the last tick, so that the fluid sees the body it pushes slow down
+/// (without it, a body is carried at its velocity through the whole tick, and the film it
+/// squeezes against a wall pushes back with the force that would stop it in one sub-step).
+#[derive(Reflect, Debug, Clone, Copy, Default, PartialEq)]
+#[reflect(Debug, PartialEq)]
+pub struct SolidResponse {
+    /// Mass, kg/m.
+    pub mass: f32,
+    /// Moment of inertia about the centre of mass, kg·m.
+    pub inertia: f32,
+    /// Added mass, kg/m, and added moment of inertia, kg·m ([`MovingSolid::added_mass`]).
+    pub added: (f32, f32),
+    /// Gravity, m/s², stepped with the added mass as the fluid's force is.
+    pub gravity: Vec2,
+    /// The acceleration (m/s²) and angular acceleration (rad/s²) of everything but the fluid
+    /// and gravity (contacts, the game's forces), taken as they are.
+    pub held: (Vec2, f32),
+}
+
+impl SolidResponse {
+    /// The change of velocity and angular velocity over `dt` under `force` and `torque`.
+    fn change(&self, force: Vec2, torque: f32, dt: f32) -> (Vec2, f32) {
+        let a = coupled_acceleration(self.mass, self.added.0, force + self.mass * self.gravity);
+        let alpha = coupled_acceleration(self.inertia, self.added.1, torque);
+        ((a + self.held.0) * dt, (alpha + self.held.1) * dt)
+    }
+}
+
 /// A rigid solid in the fluid: its shape sampled in its own frame, where it is, and what the
 /// fluid did to it (see the module docs).
 #[derive(Debug, Clone, PartialEq)]
@@ -508,6 +539,8 @@ pub struct MovingSolid {
     contact: f32,
     /// The sampling's spacing, m.
     spacing: f32,
+    /// How it answers the fluid within a tick (`None`: it keeps its velocities).
+    response: Option<SolidResponse>,
 }
 
 impl MovingSolid {
@@ -544,6 +577,7 @@ impl MovingSolid {
             load: SolidLoad::default(),
             contact: 0.0,
             spacing,
+            response: None,
         })
     }
 
@@ -571,6 +605,21 @@ impl MovingSolid {
         if finite {
             self.motion = motion;
         }
+        finite
+    }
+
+    /// Sets how it answers the fluid within a tick (`None`: it keeps the velocities of
+    /// [`set_motion`](Self::set_motion) through the tick); a response with a value that is not
+    /// finite is refused (none is kept).
+    pub fn set_response(&mut self, response: Option<SolidResponse>) -> bool {
+        let finite = response.is_none_or(|r| {
+            [r.mass, r.inertia, r.added.0, r.added.1, r.held.1]
+                .iter()
+                .all(|v| v.is_finite())
+                && r.gravity.is_finite()
+                && r.held.0.is_finite()
+        });
+        self.response = if finite { response } else { None };
         finite
     }
 
@@ -674,12 +723,21 @@ impl MovingSolid {
     }
 
     /// Ends a sub-step of `dt` seconds with the impulse (N·s/m) and angular impulse the fluid
-    /// gave besides the pending force.
+    /// gave besides the pending force; with a [`SolidResponse`], the velocities take them.
     pub(crate) fn end_substep(&mut self, dt: f32, impulse: Vec2, angular_impulse: f32) {
         let (force, torque) = core::mem::take(&mut self.pending);
-        self.impulse += impulse + force * dt;
-        self.angular_impulse += angular_impulse + torque * dt;
+        let impulse = impulse + force * dt;
+        let angular_impulse = angular_impulse + torque * dt;
+        self.impulse += impulse;
+        self.angular_impulse += angular_impulse;
         self.elapsed += dt;
+        if let Some(response) = self.response.filter(|_| dt > 0.0) {
+            let (dv, dw) = response.change(impulse / dt, angular_impulse / dt, dt);
+            if dv.is_finite() && dw.is_finite() {
+                self.motion.velocity += dv;
+                self.motion.angular_velocity += dw;
+            }
+        }
     }
 
     /// Ends a tick: the averaged force and torque, and the submerged area from `weight(x)`, the
@@ -830,6 +888,41 @@ mod tests {
         // Sampled, this disc would need some 10¹² boundary particles: it does not fit.
         assert!(!SolidShape::circle(1.0e9).fits(0.01, 3));
         assert!(MovingSolid::new(SolidShape::circle(1.0e9), Vec2::ZERO, 0.01, 3).is_none());
+    }
+
+    #[test]
+    fn a_solid_with_a_response_takes_each_substeps_force() {
+        let mut solid =
+            MovingSolid::new(SolidShape::rectangle(0.2, 0.1), Vec2::ZERO, 0.01, 2).unwrap();
+        let response = SolidResponse {
+            mass: 2.0,
+            inertia: 0.5,
+            added: (2.0, 0.5),
+            gravity: Vec2::new(0.0, -10.0),
+            held: (Vec2::new(1.0, 0.0), 0.0),
+        };
+        // Without a response the velocities stay through the tick.
+        solid.begin_tick();
+        solid.end_substep(0.01, Vec2::new(0.0, 0.4), 0.01);
+        assert_eq!(solid.motion().velocity, Vec2::ZERO);
+        // With one: (m + mₐ) a = F + m g, plus the held acceleration, over the sub-step.
+        assert!(solid.set_response(Some(response)));
+        solid.end_substep(0.01, Vec2::new(0.0, 0.4), 0.01);
+        let a = (Vec2::new(0.0, 40.0) + 2.0 * Vec2::new(0.0, -10.0)) / 4.0 + Vec2::X;
+        assert!((solid.motion().velocity - 0.01 * a).length() < 1e-6);
+        assert!((solid.motion().angular_velocity - 0.01 * (1.0 / 1.0)).abs() < 1e-6);
+        // The impulse is the fluid's, whatever the response.
+        solid.end_tick(|_| 0.0, 1.0);
+        assert!((solid.load().force - Vec2::new(0.0, 40.0)).length() < 1e-3);
+        // A response that is not finite is refused, and none is kept.
+        let bad = SolidResponse {
+            mass: f32::NAN,
+            ..response
+        };
+        assert!(!solid.set_response(Some(bad)));
+        let before = solid.motion().velocity;
+        solid.end_substep(0.01, Vec2::new(0.0, 0.4), 0.0);
+        assert_eq!(solid.motion().velocity, before);
     }
 
     #[test]

@@ -18,7 +18,7 @@ use super::kernels::RadialKernel;
 use super::layout::{FluidSnapshot, Walls};
 use super::parallel::{CHUNK, Parallel, run_jobs};
 use super::profile::{StageProfile, SubstepPart};
-use super::solid::{MovingSolid, SolidMotion};
+use super::solid::{MovingSolid, SolidMotion, SolidResponse};
 use super::wcsph::Wcsph;
 use bevy::math::Vec2;
 
@@ -399,6 +399,15 @@ impl FluidStep {
         solids
             .get_mut(k)
             .is_some_and(|solid| solid.set_motion(motion))
+    }
+
+    /// Sets how solid `k` answers the fluid within a tick ([`MovingSolid::set_response`]);
+    /// `false` if a value is not finite or there is no such solid.
+    pub fn set_solid_response(&mut self, k: usize, response: Option<SolidResponse>) -> bool {
+        let solids = &mut self.shared.walls.solids;
+        solids
+            .get_mut(k)
+            .is_some_and(|solid| solid.set_response(response))
     }
 
     /// `Σ W` of the fluid particles of the last sub-step at `x`, 1/m².

@@ -108,11 +108,12 @@ pub const DEFICIENT_NEIGHBORHOOD: f32 = 0.6;
 /// near the rest density while the solve raises its stiffness without bound (measured: 400 to
 /// 3·10⁸ m²/s² as its diagonal fell to 0.06% of the lattice's), and the step, which counts the
 /// speed the largest pressure can give, shrank with it to 10⁻⁷ s: the fluid froze (a 10 × 6 cm
-/// stone of 2,500 kg/m³ on the floor of a 0.2 m layer at 5 mm, ticks of 100 Hz). From 0.01 it
-/// comes to rest on the floor, under the water over it. The film under a body is thin but not
-/// pinned: at 0.1 a crate of half the water's density dropped from half a metre lost the cushion
-/// under it (particles between 1% and 10% of the lattice's diagonal), struck the floor and
-/// stayed there with no water under it; at 0.01 it bounces back and floats as before.
+/// stone of 2,500 kg/m³ on the floor of a 0.2 m layer at 5 mm, ticks of 100 Hz). From 0.01 the
+/// fluid steps on. The film under a body is thin but must keep its pressure: at 0.1 a crate of
+/// half the water's density that reached the floor of a pool stayed there, with no pressure
+/// under it (the glob-imported game's crate, dropped into it, with bodies answering the fluid
+/// within its tick). At 0.01 the same film held a stone released at the surface 3.5 mm above
+/// the floor for seconds (less than a spacing; a film no real water keeps under a stone).
 pub const PINNED_DIAGONAL: f32 = 0.01;
 
 /// Walls mirror the pressure of the fluid particle they push (Akinci et al. 2012 take it once;
