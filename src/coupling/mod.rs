@@ -11,21 +11,16 @@
 //! body is stepped with an added mass (see
 //! [`ADDED_MASS_RATIO`](crate::slices::ADDED_MASS_RATIO)): avian is given the acceleration
 //! `a − g` with `(m + mₐ) a = F + m g`, which rests where the fluid's force alone would hold it.
-//! The fluid carries a body at that velocity through its tick, so a body landing on the floor
-//! squeezes the film under it until the film throws it back: its acceleration is held to
-//! [`MAX_FLUID_ACCELERATION`].
-//!
-//! Opt-in ([`FluidCouplingPlugin::within_tick`], off by default while a light body that reaches
-//! the floor stays there): within the fluid's tick a dynamic body answers the force of each
-//! sub-step the same way, with what its contacts did over the last step ([`SolidDynamics`]), so
-//! the fluid moves it as avian will, and under the divergence-free solver no limit is needed.
-//! Measured on a 10 × 6 cm stone of 2,500 kg/m³ landing at 0.54 m/s at 5 mm spacing: carried,
-//! it took 6,400 N/m at 60 ticks a second and 79,000 at 100 and came to rest on its narrow side
-//! or on its back; answering, at most 850 and 690 (4.7 to 5.8 times its weight), and it lands
-//! flat and rests under the water over it. But the film under a body is gone once it touches
-//! the floor, and a crate lighter than water dropped into a pool 0.2 m deep (the glob-imported
-//! game's) reached the floor and stayed there with no pressure under it; carried, the film's
-//! spike threw it back up. Water seeping under a dry bottom is what is missing.
+//! Within the fluid's tick a dynamic body answers the force of each sub-step the same way, with
+//! what its contacts did over the last step ([`SolidDynamics`]), so the fluid moves it as avian
+//! will. Measured on a 10 × 6 cm stone of 2,500 kg/m³ landing at 0.54 m/s at 5 mm spacing:
+//! carried at its velocity through the tick ([`FluidCouplingPlugin::carried`], the exchange of
+//! earlier versions), it squeezed the film under it until the film threw it back (6,400 N/m at
+//! 60 ticks a second, 79,000 at 100), and came to rest on its narrow side or on its back;
+//! answering, it takes at most 690-890 N/m (under six times its weight), lands flat and rests,
+//! and no limit on the force is needed. Where a body touches the floor (or another body) under
+//! water, the water that seeps into the contact presses on it (`MovingSolid` in the core): a
+//! crate lighter than water that reached the floor of a pool stayed there without it.
 //! Gravity is set in one place, `SphParams::gravity`: the plugin keeps avian's `Gravity` equal
 //! to it. Tank walls for avian are opt-in ([`FluidCouplingPlugin::with_tank_walls`]).
 
@@ -53,9 +48,10 @@ pub struct FluidCouplingPlugin {
     /// its floor and stay inside (off by default: a game with its own level geometry has its
     /// own colliders).
     pub tank_walls: bool,
-    /// Let dynamic bodies answer the fluid's force within its tick under the divergence-free
-    /// solver (see the module docs; off by default).
-    pub within_tick: bool,
+    /// Carry dynamic bodies at their velocity through the fluid's tick, their acceleration held
+    /// to [`MAX_FLUID_ACCELERATION`], instead of letting them answer the fluid's force within
+    /// it (see the module docs; off by default, and always so under WCSPH).
+    pub carried: bool,
 }
 
 impl FluidCouplingPlugin {
@@ -64,15 +60,6 @@ impl FluidCouplingPlugin {
         Self {
             tank_walls: true,
             ..Self::default()
-        }
-    }
-
-    /// This coupling with dynamic bodies answering the fluid's force within its tick
-    /// ([`within_tick`](Self::within_tick)).
-    pub fn with_bodies_within_tick(self) -> Self {
-        Self {
-            within_tick: true,
-            ..self
         }
     }
 }
@@ -95,11 +82,10 @@ const WALL_THICKNESS: f32 = 0.5;
 /// crate that hits the water at 3 m/s within a few centimetres. A body that moves so fast into
 /// the tank's floor or wall that fluid is trapped between them takes a pressure spike of
 /// millions of g from it for a tick (measured: 9.5·10⁹ N/m on a sinking stone at 1 m/s); held to
-/// this, it bounces a centimetre instead of leaving the world. Not applied to bodies that answer
-/// within the tick ([`FluidCouplingPlugin::within_tick`]) under the divergence-free solver; under
-/// WCSPH (which the coupling warns against) bodies never answer within the tick and the limit
-/// stays (without it the soak's WCSPH spikes, 1.9·10⁵ N/m on a crate, threw bodies through the
-/// tank's walls at 80 m/s).
+/// this, it bounces a centimetre instead of leaving the world. Only for bodies the fluid
+/// carries through its tick ([`FluidCouplingPlugin::carried`], and always under WCSPH, which
+/// the coupling warns against: without it the soak's WCSPH spikes, 1.9·10⁵ N/m on a crate,
+/// threw bodies through the tank's walls at 80 m/s).
 pub const MAX_FLUID_ACCELERATION: f32 = 98.1;
 
 impl Plugin for FluidCouplingPlugin {
@@ -115,7 +101,7 @@ impl Plugin for FluidCouplingPlugin {
             return;
         }
         app.insert_resource(CouplingSystems {
-            within_tick: self.within_tick,
+            carried: self.carried,
         });
         if !app.is_plugin_added::<SphPlugin>() {
             error!(
@@ -238,8 +224,8 @@ fn tank_walls(
 /// Marks an app whose coupling systems were added, with its settings.
 #[derive(Resource, Default)]
 struct CouplingSystems {
-    /// [`FluidCouplingPlugin::within_tick`].
-    within_tick: bool,
+    /// [`FluidCouplingPlugin::carried`].
+    carried: bool,
 }
 
 /// Keeps avian's `Gravity` equal to the gravity the fluid stepped with this tick (from
@@ -386,15 +372,14 @@ fn copy_velocities(
     }
 }
 
-/// Whether dynamic bodies answer the fluid's force within its tick: when the plugin says so,
-/// under the divergence-free solver.
+/// Whether dynamic bodies answer the fluid's force within its tick: unless the plugin carries
+/// them, under the divergence-free solver.
 fn answers_within_tick(settings: &CouplingSystems, solver: &SphSolver) -> bool {
-    settings.within_tick && solver.constants().solver == PressureSolver::Dfsph
+    !settings.carried && solver.constants().solver == PressureSolver::Dfsph
 }
 
 /// Applies the fluid's force and torque to each dynamic coupled body, stepped with its added
-/// mass (see the module docs) and, unless it answered within the tick, held to
-/// [`MAX_FLUID_ACCELERATION`].
+/// mass (see the module docs) and, if the fluid carried it, held to [`MAX_FLUID_ACCELERATION`].
 fn apply_fluid_forces(
     solver: Res<SphSolver>,
     settings: Res<CouplingSystems>,

@@ -419,6 +419,23 @@ impl Walls {
         self.placed = None;
     }
 
+    /// Whether a wall particle lies within one and a half `spacing` of `x` and more than half
+    /// a spacing beyond it along `normal`: another wall (the tank, another solid) touching the
+    /// surface at `x`, whose own particles lie behind it.
+    pub fn touches(&self, x: Vec2, normal: Vec2, spacing: f32) -> bool {
+        let (reach_sq, beyond) = ((1.5 * spacing).powi(2), 0.5 * spacing);
+        let mut found = false;
+        self.points.for_each_batch(x, |_, dx, dy, r2| {
+            let (dx, dy, r2) = (dx.to_array(), dy.to_array(), r2.to_array());
+            for lane in 0..LANES {
+                // dx, dy = wall − x.
+                let outward = dx[lane] * normal.x + dy[lane] * normal.y;
+                found |= r2[lane] < reach_sq && outward > beyond;
+            }
+        });
+        found
+    }
+
     /// Keeps a particle out of the solids (see [`MovingSolid::push_out`]).
     #[inline]
     pub fn push_out(&self, position: &mut Vec2, velocity: &mut Vec2, restitution: f32) {

@@ -541,6 +541,8 @@ pub struct MovingSolid {
     spacing: f32,
     /// How it answers the fluid within a tick (`None`: it keeps its velocities).
     response: Option<SolidResponse>,
+    /// The waterline of the last tick's end, m (`-∞`: dry).
+    waterline: f32,
 }
 
 impl MovingSolid {
@@ -578,6 +580,7 @@ impl MovingSolid {
             contact: 0.0,
             spacing,
             response: None,
+            waterline: f32::NEG_INFINITY,
         })
     }
 
@@ -777,8 +780,71 @@ impl MovingSolid {
             0.0
         };
         self.contact = touched as f32 / outline.max(1) as f32;
+        self.waterline = waterline;
         self.load.submerged_area = under;
         self.load.submerged_fraction = if area > 0.0 { under / area } else { 0.0 };
+    }
+
+    /// Adds to the tick's load (after [`end_tick`](Self::end_tick)) the pressure of the water
+    /// that seeps into its contacts: each dry point of the outline (`weight(x)` under `wet`)
+    /// under the waterline where `touches(x, n)` finds another wall just outside the surface
+    /// (outward normal `n`) takes the pressure of the nearest wet point of its ring
+    /// (`pressure(x)`, Pa, carried hydrostatically), carried to its depth with `head` Pa/m
+    /// (ρ₀ |g|), over a spacing of outline.
+    ///
+    /// A gap thinner than a particle holds no fluid particle, so a body resting on the floor
+    /// has a dry bottom with no pressure on it: a crate lighter than water that reached the
+    /// floor of a pool stayed there. Real contacts are wet: water fills any gap a body leaves,
+    /// at the pressure round it (a rock on the bed feels its buoyancy).
+    pub(crate) fn seep(
+        &mut self,
+        weight: impl Fn(Vec2) -> f32,
+        wet: f32,
+        pressure: impl Fn(Vec2) -> Option<f32>,
+        touches: impl Fn(Vec2, Vec2) -> bool,
+        head: f32,
+    ) {
+        if !self.waterline.is_finite() {
+            return;
+        }
+        let (pose, center) = (self.motion.pose, self.world_center());
+        let turn = Rot2::radians(pose.angle);
+        let (mut force, mut torque) = (Vec2::ZERO, 0.0);
+        for ring in &self.rings {
+            let points: Vec<Vec2> = self.local[ring.clone()]
+                .iter()
+                .map(|&p| pose.apply(p))
+                .collect();
+            // Each wet point's pressure, carried to the height 0.
+            let at_zero: Vec<Option<f32>> = points
+                .iter()
+                .map(|&x| {
+                    let p = (weight(x) >= wet).then(|| pressure(x)).flatten()?;
+                    Some(p + head * x.y)
+                })
+                .collect();
+            let n = points.len();
+            for (i, &x) in points.iter().enumerate() {
+                if weight(x) >= wet || x.y >= self.waterline {
+                    continue;
+                }
+                let normal = turn * self.shape.distance(self.local[ring.start + i]).1;
+                if !touches(x, normal) {
+                    continue;
+                }
+                // The nearest wet point round the ring, either way.
+                let Some(p0) =
+                    (1..n).find_map(|k| at_zero[(i + k) % n].or(at_zero[(i + n - k) % n]))
+                else {
+                    continue;
+                };
+                let push = -(p0 - head * x.y).max(0.0) * self.spacing * normal;
+                force += push;
+                torque += (x - center).perp_dot(push);
+            }
+        }
+        self.load.force += force;
+        self.load.torque += torque;
     }
 }
 
@@ -888,6 +954,37 @@ mod tests {
         // Sampled, this disc would need some 10¹² boundary particles: it does not fit.
         assert!(!SolidShape::circle(1.0e9).fits(0.01, 3));
         assert!(MovingSolid::new(SolidShape::circle(1.0e9), Vec2::ZERO, 0.01, 3).is_none());
+    }
+
+    #[test]
+    fn water_seeps_into_a_dry_contact_at_the_pressure_round_it() {
+        let mut solid =
+            MovingSolid::new(SolidShape::rectangle(0.2, 0.1), Vec2::ZERO, 0.01, 2).unwrap();
+        let head = 9810.0;
+        // Water up to y = 1; the bottom is dry but near its ends, and touches the floor.
+        let dry = |x: Vec2| x.y < -0.04 && x.x.abs() < 0.07;
+        let weight = |x: Vec2| if dry(x) { 0.0 } else { 1.0 };
+        let pressure = |x: Vec2| Some(head * (1.0 - x.y));
+        solid.begin_tick();
+        solid.end_tick(weight, 0.5);
+        let before = solid.load();
+        solid.seep(weight, 0.5, pressure, |_, n: Vec2| n.y < -0.5, head);
+        let bottom: Vec<Vec2> = solid
+            .local_points()
+            .iter()
+            .copied()
+            .filter(|&p| dry(p))
+            .collect();
+        let expected: f32 = bottom.iter().map(|p| head * (1.0 - p.y) * 0.01).sum();
+        let load = solid.load();
+        assert!(!bottom.is_empty());
+        assert!(((load.force - before.force).y - expected).abs() < 1e-3 * expected);
+        assert!((load.force - before.force).x.abs() < 1e-3 && load.torque.abs() < 1e-2);
+        // Nothing seeps where nothing touches.
+        solid.end_tick(weight, 0.5);
+        let before = solid.load();
+        solid.seep(weight, 0.5, pressure, |_, _| false, head);
+        assert_eq!(solid.load(), before);
     }
 
     #[test]

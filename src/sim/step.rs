@@ -373,9 +373,20 @@ impl FluidStep {
     pub fn end_tick(&mut self) {
         self.shared.clock.end_tick();
         let mut solids = core::mem::take(&mut self.shared.walls.solids);
-        let volume = self.shared.constants.volume;
+        let c = &self.shared.constants;
+        let (volume, spacing) = (c.volume, c.spacing);
+        let head = c.rest_density * c.gravity.length();
         for solid in &mut solids {
             solid.end_tick(|x| self.weight(x) * volume, WET_WEIGHT);
+            let touches = |x, n| self.shared.walls.touches(x, n, spacing);
+            let pressure = |x| self.sample(x, true).map(|sample| sample.2);
+            solid.seep(
+                |x| self.weight(x) * volume,
+                WET_WEIGHT,
+                pressure,
+                touches,
+                head,
+            );
         }
         self.shared.walls.solids = solids;
     }

@@ -174,23 +174,26 @@ fn a_stone_sinks_and_rests_on_the_floor() {
 }
 
 /// A stone of 2.5 times the water's density (a 10 × 6 cm box) released at the surface of the
-/// 0.2 m layer at 5 mm spacing, ticks of 100 Hz, sinks onto the floor, and the fluid keeps
+/// 0.2 m layer at 5 mm spacing, ticks of 100 Hz, carried by the fluid at its velocity through
+/// each tick (`FluidCouplingPlugin::carried`), sinks onto the floor, and the fluid keeps
 /// stepping: every tick within a quarter of the sub-step budget (no time dropped), no particle
 /// ever inside the stone, everything finite.
 ///
 /// Before pinned particles were left out of the solves (`PINNED_DIAGONAL` in the core), a
 /// particle caught in the closing gap, whose density no pressure could change, took a stiffness
 /// that grew without bound and the step shrank with it (to 10⁻⁷ s): here 400 sub-steps a tick,
-/// time dropped. Measured since: at most 53.
+/// time dropped. Measured since: at most 27.
 ///
-/// That it comes to rest is not asserted: the coupling hands the body the fluid's force once a
-/// tick, so the film squeezed out under the landing stone gives it short, strong pushes
-/// (measured: up to 3,800 N/m at 60 ticks a second, 1,100 at 200, against a weight of 147 N/m)
-/// that tip it and throw it up; whether it has stopped rocking after two seconds changes with
-/// the last bit of the flow (here it had not: 0.16 m/s).
+/// That it comes to rest is not asserted: carried, the stone squeezes the film under it until
+/// the film throws it back (up to 6,400 N/m at 60 ticks a second, 79,000 at 100, against a
+/// weight of 147 N/m), tumbling.
 #[test]
 fn a_stone_landing_on_the_floor_keeps_the_fluid_stepping() {
-    let mut app = harbour_app_with(0.4, 0.005, FluidCouplingPlugin::with_tank_walls());
+    let coupling = FluidCouplingPlugin {
+        carried: true,
+        ..FluidCouplingPlugin::with_tank_walls()
+    };
+    let mut app = harbour_app_with(0.4, 0.005, coupling);
     app.world_mut()
         .resource_mut::<Time<Fixed>>()
         .set_timestep(Duration::from_millis(10));
@@ -225,8 +228,7 @@ fn a_stone_landing_on_the_floor_keeps_the_fluid_stepping() {
 }
 
 /// A stone of 2.5 times the water's density (a 10 × 6 cm box) dropped flat with its bottom
-/// 0.3 m above the 0.2 m layer (5 mm spacing, ticks of 100 Hz, bodies answering the fluid
-/// within its tick: `FluidCouplingPlugin::with_bodies_within_tick`) splashes in, sinks, lands flat
+/// 0.3 m above the 0.2 m layer (5 mm spacing, ticks of 100 Hz) splashes in, sinks, lands flat
 /// on the floor and rests there with the water's weight over it pressing it down (no film left
 /// under it: ρ₀ g (D − h) w within 10%, `D` the still-water level); from the first tick it is
 /// within a centimetre of the floor the fluid's force stays under eight times its weight
@@ -236,13 +238,12 @@ fn a_stone_landing_on_the_floor_keeps_the_fluid_stepping() {
 /// Before pinned particles were left out of the solves (`PINNED_DIAGONAL` in the core), a
 /// particle caught in the closing gap, whose density no pressure could change, took a stiffness
 /// that grew without bound and the step shrank with it (to 10⁻⁷ s): 400 sub-steps a tick, time
-/// dropped. Carried at its speed through the whole tick (the default coupling), the stone
-/// squeezes the film under it until the film throws it back (79,000 N/m at 100 ticks a second,
-/// a force the default holds to 10 g), tumbling, to rest on its narrow side.
+/// dropped. Carried at its speed through the whole tick (`FluidCouplingPlugin::carried`, the
+/// exchange of earlier versions), the stone squeezes the film under it until the film throws it
+/// back (79,000 N/m at 100 ticks a second, held to 10 g), tumbling, to rest on its narrow side.
 #[test]
 fn a_stone_dropped_into_the_water_lands_flat_and_rests_under_it() {
-    let coupling = FluidCouplingPlugin::with_tank_walls().with_bodies_within_tick();
-    let mut app = harbour_app_with(0.7, 0.005, coupling);
+    let mut app = harbour_app_with(0.7, 0.005, FluidCouplingPlugin::with_tank_walls());
     app.world_mut()
         .resource_mut::<Time<Fixed>>()
         .set_timestep(Duration::from_millis(10));

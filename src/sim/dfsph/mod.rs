@@ -109,12 +109,12 @@ pub const DEFICIENT_NEIGHBORHOOD: f32 = 0.6;
 /// 3·10⁸ m²/s² as its diagonal fell to 0.06% of the lattice's), and the step, which counts the
 /// speed the largest pressure can give, shrank with it to 10⁻⁷ s: the fluid froze (a 10 × 6 cm
 /// stone of 2,500 kg/m³ on the floor of a 0.2 m layer at 5 mm, ticks of 100 Hz). From 0.01 the
-/// fluid steps on. The film under a body is thin but must keep its pressure: at 0.1 a crate of
-/// half the water's density that reached the floor of a pool stayed there, with no pressure
-/// under it (the glob-imported game's crate, dropped into it, with bodies answering the fluid
-/// within its tick). At 0.01 the same film held a stone released at the surface 3.5 mm above
-/// the floor for seconds (less than a spacing; a film no real water keeps under a stone).
-pub const PINNED_DIAGONAL: f32 = 0.01;
+/// fluid steps on; at 0.01 a row of particles a spacing apart, caught in a gap thinner than a
+/// spacing, held that stone 3.5 mm above the floor for seconds (a film no real water keeps
+/// under a stone); at 0.1 the row is pinned and the stone rests on the floor. The pressure
+/// such a film carries comes instead from the water seeping into the contact (see the core's
+/// `MovingSolid`): without it a crate lighter than water that reached the floor stayed there.
+pub const PINNED_DIAGONAL: f32 = 0.1;
 
 /// Walls mirror the pressure of the fluid particle they push (Akinci et al. 2012 take it once;
 /// mirrored, a particle at a wall holds the hydrostatic pressure of its depth instead of twice
