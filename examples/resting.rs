@@ -8,9 +8,11 @@
 //!     --layer 0.1,0.2,0.002
 //! ```
 
+mod validation;
+
 use bevy_sph2d::fluid::{DfsphSettings, SphParams};
-use bevy_sph2d::validation::{DamBreakSettling, LayerReport, RestingLayer};
 use clap::{Parser, ValueEnum};
+use validation::{DamBreakSettling, LayerReport, RestingLayer};
 
 /// Runs resting layers and prints how close each comes to hydrostatic.
 #[derive(Parser, Debug)]

@@ -5,11 +5,13 @@
 //! cargo run --release --no-default-features --example validate -- --out assets/validate.png
 //! ```
 
+mod validation;
+
 use bevy_sph2d::fluid::{PressureSolver, SphParams};
-use bevy_sph2d::validation::{MARTIN_MOYCE, MartinMoyce, compare};
 use clap::Parser;
 use plotters::prelude::*;
 use std::path::PathBuf;
+use validation::{MARTIN_MOYCE, MartinMoyce, compare};
 
 /// Runs the Martin & Moyce dam break with DFSPH and WCSPH and charts the surge front.
 #[derive(Parser, Debug)]

@@ -62,8 +62,8 @@
 //! ([`fluid::kernels`]), the cell-list neighbour search ([`slices::NeighborGrid`]), the whole
 //! fluid on plain vectors ([`slices::SliceFluid`], the core's second driver, with the core's
 //! own types in [`slices`]) and the quadtree
-//! ([`gravity::QuadTree`]); [`validation`] holds the Martin & Moyce data and the resting-layer
-//! checks run on it.
+//! ([`gravity::QuadTree`]). The Martin & Moyce data and the resting-layer checks run on it
+//! live beside the examples (`examples/validation/`), which share them with the tests.
 
 #![warn(missing_docs)]
 // Unsafe code only in the SIMD sums of the core (each block with its SAFETY note), which allow it.
@@ -87,7 +87,6 @@ pub mod render;
 mod schedule;
 mod sim;
 pub mod slices;
-pub mod validation;
 
 pub use control::{
     ResetSimulation, SimulationControl, SimulationControlPlugin, SimulationControlSystems,

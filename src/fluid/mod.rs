@@ -26,7 +26,7 @@ pub use components::{Acceleration, Density, FluidParticle, Position, Pressure, V
 pub(crate) use components::{FluidIndex, Stiffness};
 pub(crate) use driver::SubstepHooks;
 pub use driver::refresh_fluid_state;
-pub(crate) use params::STANDARD_GRAVITY;
+pub use params::STANDARD_GRAVITY;
 pub use params::{SphParams, SphParamsError};
 pub use resources::{SphParamsStatus, SphSolver, SphStats};
 pub(crate) use solids::pose_of;

@@ -781,6 +781,8 @@ impl MovingSolid {
         };
         self.contact = touched as f32 / outline.max(1) as f32;
         self.waterline = waterline;
+        // The parts' areas below the line can overlap or round past the whole: at most it.
+        let under = under.min(area);
         self.load.submerged_area = under;
         self.load.submerged_fraction = if area > 0.0 { under / area } else { 0.0 };
     }

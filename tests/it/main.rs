@@ -17,5 +17,7 @@ mod schedule;
 mod soak;
 mod solids;
 mod sources_and_sensors;
+#[path = "../../examples/validation/mod.rs"]
+mod validation;
 #[cfg(all(feature = "avian", feature = "render"))]
 mod with_avian;

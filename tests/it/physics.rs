@@ -2,11 +2,11 @@
 //! dam break against Martin & Moyce (1952), and momentum conservation.
 
 use crate::common::*;
+use crate::validation::{DamBreakSettling, MartinMoyce, RestingLayer, compare};
 use bevy::prelude::*;
 use bevy_sph2d::fluid::{SphParams, Tank};
 use bevy_sph2d::gameplay::{FluidBlock, FluidQuery};
 use bevy_sph2d::prelude::*;
-use bevy_sph2d::validation::{DamBreakSettling, MartinMoyce, RestingLayer, compare};
 
 const G: f32 = 9.81;
 

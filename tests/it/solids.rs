@@ -2,11 +2,11 @@
 //! the stable attitude from the SPH pressure alone, a moving solid exchanges momentum with the
 //! fluid exactly, and a still one leaves still water still.
 
+use crate::validation::{FloatingBox, RestingLayer};
 use bevy::math::Vec2;
 use bevy_sph2d::fluid::{PressureSolver, SolidShape, SphParams, Tank};
 use bevy_sph2d::gameplay::FluidBlock;
 use bevy_sph2d::slices::{MovingSolid, SliceFluid, SolidMotion};
-use bevy_sph2d::validation::{FloatingBox, RestingLayer};
 
 const TICK: f64 = 1.0 / 60.0;
 

@@ -1,12 +1,24 @@
 //! Reusable physical checks, headless on [`SliceFluid`]: the Martin & Moyce (1952) dam break
 //! (the experiment's surge-front data, the scene in SPH units, a run that records the front),
-//! and a resting layer of any depth and spacing measured against hydrostatics. The physics tests
-//! assert on them and the `validate` example prints and charts them. No ECS: it runs on the plain-vector driver.
+//! a resting layer of any depth and spacing measured against hydrostatics, and a floating box.
+//! The physics tests assert on them (`#[path]` from `tests/`) and the `validate` and `resting`
+//! examples print and chart them (`mod validation;`). Not part of the library: it runs on the
+//! crate's public plain-vector driver, as any user's check would. No ECS.
 
-use crate::fluid::{STANDARD_GRAVITY, SphParams, Tank};
-use crate::gameplay::FluidBlock;
-use crate::sim::density::max_length;
-use crate::slices::SliceFluid;
+#![allow(dead_code, reason = "each example uses a different part")]
+
+use bevy::math::Vec2;
+use bevy_sph2d::fluid::{STANDARD_GRAVITY, SphParams, Tank};
+use bevy_sph2d::gameplay::FluidBlock;
+use bevy_sph2d::slices::SliceFluid;
+
+/// The largest length among `vectors`.
+fn max_length(vectors: &[Vec2]) -> f32 {
+    vectors
+        .iter()
+        .fold(0.0f32, |m, a| m.max(a.length_squared()))
+        .sqrt()
+}
 
 /// Martin & Moyce (1952), Phil. Trans. R. Soc. A 244, fig. 3, a column of width `a` and height
 /// `2a` (n² = 2, a = 2.25 in): dimensionless time `t √(2g/a)` and surge front position `Z/a`.
@@ -246,7 +258,7 @@ impl DamBreakSettling {
 }
 
 /// A box released at the still-water level of a [`RestingLayer`], free to heave, sway and roll
-/// under gravity and the fluid's force and torque ([`MovingSolid::load`](crate::slices::MovingSolid::load)), stepped with them
+/// under gravity and the fluid's force and torque ([`MovingSolid::load`](bevy_sph2d::slices::MovingSolid::load)), stepped with them
 /// once a tick (semi-implicit Euler, as a rigid-body engine would): Archimedes says it floats
 /// with its bottom `relative_density × height` under the water.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -289,8 +301,8 @@ impl FloatingBox {
         average: f64,
         tick: f64,
     ) -> Option<FloatReport> {
-        use crate::fluid::{Pose, SolidShape, coupled_acceleration};
-        use crate::slices::{MovingSolid, SolidMotion};
+        use bevy_sph2d::fluid::{Pose, SolidShape, coupled_acceleration};
+        use bevy_sph2d::slices::{MovingSolid, SolidMotion};
         let params = self.layer.params(base);
         let c = params.constants().ok()?;
         let shape = SolidShape::rectangle(self.size.x, self.size.y);
