@@ -6,13 +6,21 @@ use crate::common::*;
 use avian2d::prelude::{
     Collider, ColliderDensity, Gravity, LinearVelocity, PhysicsPlugins, RigidBody,
 };
+use bevy::log::tracing::{
+    self,
+    field::{Field, Visit},
+};
+use bevy::log::tracing_subscriber::layer::{Context, Layer, SubscriberExt};
+use bevy::log::tracing_subscriber::registry::Registry;
 use bevy::prelude::*;
 use bevy_sph2d::coupling::{FluidCoupled, FluidCouplingPlugin, TankWall};
+use bevy_sph2d::fluid::PressureSolver;
 use bevy_sph2d::fluid::{
     FluidForce, FluidParticle, Position, Solid, SphParams, SphSolver, SphStats, SphSystems,
     Submerged, Tank,
 };
 use bevy_sph2d::gameplay::FluidBlock;
+use std::sync::{Arc, Mutex, OnceLock};
 use std::time::Duration;
 
 /// A resting layer 0.2 m deep in a 0.8 m wide tank `height` m high with the coupling and avian.
@@ -300,6 +308,65 @@ fn a_stone_dropped_into_the_water_lands_flat_and_rests_under_it() {
     );
     assert_eq!(most_inside(&app), 0, "particles inside the stone");
     assert!(all_finite(&states(&mut app)));
+}
+
+/// Coupling a body under WCSPH, which throws bodies lighter than water out of it (relative
+/// densities 0.3 and 0.5 measured), warns once and names the solver.
+#[test]
+fn coupling_a_body_under_wcsph_warns_naming_the_solver() {
+    let warnings = warnings();
+    let mut app = harbour_app(0.4);
+    {
+        let mut params = app.world_mut().resource_mut::<SphParams>();
+        params.solver = PressureSolver::Wcsph;
+        params.support_ratio = 2.5;
+    }
+    run(&mut app, 1);
+    let named = |w: &String| w.contains("FluidCouplingPlugin") && w.contains("WCSPH");
+    assert!(!warnings.lock().unwrap().iter().any(named));
+    drop_box(&mut app, 0.4, 0.25, 0.1, 0.1, 500.0);
+    run(&mut app, 3);
+    let found = warnings.lock().unwrap().iter().filter(|w| named(w)).count();
+    assert_eq!(found, 1, "{:?}", warnings.lock().unwrap());
+}
+
+/// Every warning logged in this test binary, from the first call on (a global subscriber:
+/// systems log from the task pool's threads).
+fn warnings() -> Arc<Mutex<Vec<String>>> {
+    static STORE: OnceLock<Arc<Mutex<Vec<String>>>> = OnceLock::new();
+    STORE
+        .get_or_init(|| {
+            let store = Arc::new(Mutex::new(Vec::new()));
+            let subscriber = Registry::default().with(Capture(store.clone()));
+            tracing::subscriber::set_global_default(subscriber)
+                .expect("no other subscriber in the test binary");
+            store
+        })
+        .clone()
+}
+
+/// A tracing layer that keeps the message of every warning.
+struct Capture(Arc<Mutex<Vec<String>>>);
+
+impl<S: tracing::Subscriber> Layer<S> for Capture {
+    fn on_event(&self, event: &tracing::Event<'_>, _: Context<'_, S>) {
+        if *event.metadata().level() == tracing::Level::WARN {
+            let mut message = Message(String::new());
+            event.record(&mut message);
+            self.0.lock().unwrap().push(message.0);
+        }
+    }
+}
+
+/// An event's message field.
+struct Message(String);
+
+impl Visit for Message {
+    fn record_debug(&mut self, field: &Field, value: &dyn std::fmt::Debug) {
+        if field.name() == "message" {
+            self.0 = format!("{value:?}");
+        }
+    }
 }
 
 /// A 10 cm crate of half the water's density dropped with its bottom half a metre above the
