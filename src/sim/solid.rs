@@ -817,23 +817,26 @@ impl MovingSolid {
                 .iter()
                 .map(|&p| pose.apply(p))
                 .collect();
-            // Each wet point's pressure, carried to the height 0.
+            let is_wet: Vec<bool> = points.iter().map(|&x| weight(x) >= wet).collect();
+            // The dry points under the waterline that touch another wall, with their normals.
+            let seeping: Vec<(usize, Vec2)> = (0..points.len())
+                .filter(|&i| !is_wet[i] && points[i].y < self.waterline)
+                .map(|i| (i, turn * self.shape.distance(self.local[ring.start + i]).1))
+                .filter(|&(i, normal)| touches(points[i], normal))
+                .collect();
+            if seeping.is_empty() {
+                continue;
+            }
+            // Each wet point's pressure, carried to the height 0 (sampled only for a ring
+            // with a contact).
             let at_zero: Vec<Option<f32>> = points
                 .iter()
-                .map(|&x| {
-                    let p = (weight(x) >= wet).then(|| pressure(x)).flatten()?;
-                    Some(p + head * x.y)
-                })
+                .zip(&is_wet)
+                .map(|(&x, &w)| Some(w.then(|| pressure(x)).flatten()? + head * x.y))
                 .collect();
             let n = points.len();
-            for (i, &x) in points.iter().enumerate() {
-                if weight(x) >= wet || x.y >= self.waterline {
-                    continue;
-                }
-                let normal = turn * self.shape.distance(self.local[ring.start + i]).1;
-                if !touches(x, normal) {
-                    continue;
-                }
+            for (i, normal) in seeping {
+                let x = points[i];
                 // The nearest wet point round the ring, either way.
                 let Some(p0) =
                     (1..n).find_map(|k| at_zero[(i + k) % n].or(at_zero[(i + n - k) % n]))
