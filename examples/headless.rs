@@ -11,12 +11,15 @@
 //! cargo run --release --example headless -- --scenario dam-break --column-width 0.1 \
 //!     --column-height 0.2 --tank-width 0.8 --tank-height 0.3 --spacing 0.0025 \
 //!     --duration 1 --every 0.01 --seed 1 --out dam_break.csv
+//! cargo run --release --example headless -- --scenario drop --gravity 0 --column-width 0.05 \
+//!     --column-height 0.025 --tank-width 0.2 --tank-height 0.2 --spacing 0.001 --out drop.csv
 //! ```
 
 use bevy::prelude::*;
 use bevy::time::TimeUpdateStrategy;
 use bevy_sph2d::fluid::{
-    DfsphSettings, PressureSolver, SphParams, SphSolver, Tank, refresh_fluid_state,
+    DfsphSettings, PressureSolver, STANDARD_GRAVITY, SphParams, SphSolver, Tank,
+    refresh_fluid_state,
 };
 use bevy_sph2d::gameplay::FluidBlock;
 use bevy_sph2d::gravity::GravityAcceleration;
@@ -37,12 +40,15 @@ struct Cli {
     /// What to simulate.
     #[arg(long, value_enum, default_value_t = Scenario::DamBreak)]
     scenario: Scenario,
-    /// Dam-break column width, m.
+    /// Dam-break column (drop: block) width, m.
     #[arg(long, default_value_t = 0.1, value_parser = positive)]
     column_width: f32,
-    /// Dam-break column height, m.
+    /// Dam-break column (drop: block) height, m.
     #[arg(long, default_value_t = 0.2, value_parser = positive)]
     column_height: f32,
+    /// Gravity, m/s², downward (0: weightless).
+    #[arg(long, default_value_t = STANDARD_GRAVITY, value_parser = non_negative)]
+    gravity: f32,
     /// Tank inner width, m.
     #[arg(long, default_value_t = 0.8, value_parser = positive)]
     tank_width: f32,
@@ -175,6 +181,9 @@ enum Scenario {
     /// A resting layer with one avian body released at its surface (built with `--features
     /// avian`; writes `--bodies-out` too).
     Float,
+    /// A block `--column-width` by `--column-height` centred in the tank, released (with
+    /// `--gravity 0`, a weightless drop).
+    Drop,
 }
 
 /// The fluid's pressure solver.
@@ -203,6 +212,18 @@ fn positive(text: &str) -> Result<f32, String> {
         Ok(value)
     } else {
         Err(format!("must be a positive number, got {value}"))
+    }
+}
+
+/// A finite number, zero or more.
+fn non_negative(text: &str) -> Result<f32, String> {
+    let value: f32 = text
+        .parse()
+        .map_err(|_| format!("cannot read '{text}' as a number"))?;
+    if value.is_finite() && value >= 0.0 {
+        Ok(value)
+    } else {
+        Err(format!("must be zero or a positive number, got {value}"))
     }
 }
 
@@ -253,6 +274,16 @@ fn configure(cli: &Cli) -> Result<Config, String> {
             }
             (FluidBlock::dam_break(w, h), h, w / 40.0)
         }
+        Scenario::Drop => {
+            let (w, h) = (cli.column_width, cli.column_height);
+            if w >= tank.width || h >= tank.height {
+                return Err(format!(
+                    "the {w} m × {h} m block does not fit inside the tank"
+                ));
+            }
+            let corner = Vec2::new(tank.width - w, tank.height - h) / 2.0;
+            (FluidBlock::new(corner, Vec2::new(w, h)), h, w / 40.0)
+        }
         Scenario::Galaxy => return Err("the galaxy scenario has no fluid".into()),
         Scenario::Tank | Scenario::Float => {
             let depth = cli.depth;
@@ -284,6 +315,7 @@ fn configure(cli: &Cli) -> Result<Config, String> {
             .unwrap_or_else(|| SphParams::speed_of_sound_for_height(height)),
         kinematic_viscosity: cli.viscosity,
         artificial_viscosity: cli.alpha,
+        gravity: Vec2::new(0.0, -cli.gravity),
         tank: Some(tank),
         max_substeps: 100_000,
         ..default()

@@ -58,6 +58,16 @@ fn bad_arguments_are_refused_with_the_usage() {
         &["--scenario", "volcano"],
         &["--column-width", "2", "--tank-width", "1"],
         &["--every", "0"],
+        &["--gravity", "-1"],
+        &["--gravity", "nan"],
+        &[
+            "--scenario",
+            "drop",
+            "--column-width",
+            "0.5",
+            "--tank-width",
+            "0.5",
+        ],
         &["--spacing"],
         &["stray"],
     ] {
@@ -164,6 +174,66 @@ fn tank_scenario_writes_hydrostatic_pressure() {
         checked += 1;
     }
     assert!(checked >= 30);
+}
+
+/// The drop scenario's block starts centred in the tank with the size asked for; weightless
+/// (`--gravity 0`) it stays there, under gravity it falls.
+#[test]
+fn drop_scenario_centres_a_block_that_falls_only_under_gravity() {
+    let mut moved = Vec::new();
+    for gravity in ["0", "9.81"] {
+        let (_, rows) = record(
+            &format!("drop_{gravity}"),
+            &[
+                "--scenario",
+                "drop",
+                "--gravity",
+                gravity,
+                "--column-width",
+                "0.04",
+                "--column-height",
+                "0.02",
+                "--tank-width",
+                "0.2",
+                "--tank-height",
+                "0.3",
+                "--spacing",
+                "0.002",
+                "--jitter",
+                "0",
+                "--duration",
+                "0.1",
+                "--every",
+                "0.1",
+            ],
+        );
+        let frame = |time: f64| -> Vec<&Vec<f64>> {
+            rows.iter().filter(|r| (r[0] - time).abs() < 1e-6).collect()
+        };
+        let (first, last) = (frame(0.0), frame(0.1));
+        assert_eq!((first.len(), last.len()), (20 * 10, 20 * 10));
+        let centre = |rows: &[&Vec<f64>]| -> (f64, f64) {
+            let n = rows.len() as f64;
+            let sum = rows
+                .iter()
+                .fold((0.0, 0.0), |(x, y), r| (x + r[2], y + r[3]));
+            (sum.0 / n, sum.1 / n)
+        };
+        let (x0, y0) = centre(&first);
+        assert!(
+            (x0 - 0.1).abs() < 1e-4 && (y0 - 0.15).abs() < 1e-4,
+            "({x0}, {y0})"
+        );
+        let width = first.iter().map(|r| r[2]).fold(f64::MIN, f64::max)
+            - first.iter().map(|r| r[2]).fold(f64::MAX, f64::min);
+        assert!((width - 0.038).abs() < 1e-4, "{width}");
+        let (x1, y1) = centre(&last);
+        moved.push(((x1 - x0).abs(), y0 - y1));
+    }
+    // Weightless, the centre stays within a hundredth of a spacing; under gravity it falls
+    // ½ g t² = 4.9 cm in 0.1 s.
+    assert!(moved[0].0 < 2e-5 && moved[0].1.abs() < 2e-5, "{moved:?}");
+    assert!((moved[1].1 - 0.049).abs() < 0.002, "{moved:?}");
 }
 
 #[test]
