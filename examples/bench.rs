@@ -110,12 +110,16 @@ struct Cli {
     /// With --realtime: where a sub-step's time goes, a line per part before the last line.
     #[arg(long, requires = "realtime")]
     breakdown: bool,
+    /// Surface tension, N/m (0: none), to measure what its pass costs.
+    #[arg(long, default_value_t = 0.0, conflicts_with = "gravity")]
+    surface_tension: f32,
 }
 
 impl Cli {
-    /// `params` with the strict solve of --reference and the DFSPH budget of
-    /// --density-iterations and --divergence-iterations, if given.
+    /// `params` with the surface tension of --surface-tension, the strict solve of --reference
+    /// and the DFSPH budget of --density-iterations and --divergence-iterations, if given.
     fn budgeted(&self, mut params: SphParams) -> SphParams {
+        params.surface_tension = self.surface_tension;
         if self.reference {
             params.dfsph = DfsphSettings::reference();
         }

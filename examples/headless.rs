@@ -94,6 +94,9 @@ struct Cli {
     /// Artificial viscosity.
     #[arg(long, default_value_t = 0.02)]
     alpha: f32,
+    /// Surface tension, N/m (water: 0.072; 0: none; experimental).
+    #[arg(long, default_value_t = 0.0, value_parser = non_negative)]
+    surface_tension: f32,
     /// Compute threads [default: all cores].
     #[arg(long)]
     threads: Option<usize>,
@@ -315,6 +318,7 @@ fn configure(cli: &Cli) -> Result<Config, String> {
             .unwrap_or_else(|| SphParams::speed_of_sound_for_height(height)),
         kinematic_viscosity: cli.viscosity,
         artificial_viscosity: cli.alpha,
+        surface_tension: cli.surface_tension,
         gravity: Vec2::new(0.0, -cli.gravity),
         tank: Some(tank),
         max_substeps: 100_000,

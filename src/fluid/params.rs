@@ -3,8 +3,9 @@
 
 use crate::params::{ParamField, ParamTable, param_field};
 use crate::sim::boundary::Tank;
-use crate::sim::config::{DfsphSettings, PressureSolver, SphConstants};
+use crate::sim::config::{DfsphSettings, PressureSolver, SphConstants, SurfaceCalibration};
 use crate::sim::kernels::{self, KernelKind};
+use crate::sim::tension;
 use bevy::prelude::*;
 
 /// Standard gravity, m/s².
@@ -67,6 +68,14 @@ pub struct SphParams {
     pub solver: PressureSolver,
     /// Settings of [`PressureSolver::Dfsph`] (ignored by WCSPH).
     pub dfsph: DfsphSettings,
+    /// Surface tension `σ`, N/m (water against air: 0.072; 0, the default, switches it off).
+    /// Off by default because at the default 2 cm spacing water's capillary length
+    /// (`√(σ/ρg)`, 2.7 mm) is under a spacing: the pull would change nothing one could see, at
+    /// a cost per sub-step. It matters for drops and films tens of spacings across (see
+    /// `docs/physics.md`, "Surface tension"; experimental: a drop holds together and oscillates
+    /// at its Rayleigh period, but its Laplace pressure reads about 40% high), and it shortens
+    /// the sub-step to the capillary limit `√(ρ₀Δx³/2πσ)`.
+    pub surface_tension: f32,
 }
 
 impl Default for SphParams {
@@ -117,6 +126,8 @@ impl SphParams {
     pub const KINEMATIC_VISCOSITY: ParamField<Self> = param_field!(kinematic_viscosity, "kinematic viscosity ν", "m²/s", (0.0, 100.0), false, (0.0, 1.0e-2), true);
     /// [`artificial_viscosity`](Self::artificial_viscosity).
     pub const ARTIFICIAL_VISCOSITY: ParamField<Self> = param_field!(artificial_viscosity, "artificial viscosity α", "", (0.0, 10.0), false, (0.0, 1.0), false);
+    /// [`surface_tension`](Self::surface_tension).
+    pub const SURFACE_TENSION: ParamField<Self> = param_field!(surface_tension, "surface tension σ", "N/m", (0.0, 100.0), false, (0.0, 0.5), false);
     /// [`support_ratio`](Self::support_ratio).
     pub const SUPPORT_RATIO: ParamField<Self> = param_field!(support_ratio, "support H/Δx", "spacings", (1.5, 5.0), false, (1.5, 5.0), false);
     /// The x part of [`gravity`](Self::gravity), for the panel: not in the table's
@@ -163,6 +174,7 @@ impl ParamTable for SphParams {
         Self::BACKGROUND_PRESSURE,
         Self::KINEMATIC_VISCOSITY,
         Self::ARTIFICIAL_VISCOSITY,
+        Self::SURFACE_TENSION,
         Self::SUPPORT_RATIO,
         Self::CFL_NUMBER,
         Self::MAX_SUBSTEPS,
@@ -202,6 +214,7 @@ impl SphParams {
             wall_restitution: 0.0,
             solver: PressureSolver::Dfsph,
             dfsph: DfsphSettings::default(),
+            surface_tension: 0.0,
         }
     }
 
@@ -311,6 +324,27 @@ impl SphParams {
             ),
         };
         (sum / moment) as f32
+    }
+
+    /// How a flat free surface of the rest lattice reads, for the surface tension
+    /// (on the rest lattice's flat surface).
+    pub fn surface_calibration(&self) -> SurfaceCalibration {
+        let volume = self.particle_mass() / self.rest_density;
+        let (h, dx) = (self.support_radius(), self.particle_spacing);
+        match self.kernel {
+            KernelKind::WendlandC2 => {
+                let w = kernels::WendlandC2::new(h);
+                tension::calibrate(&w, &w, dx, volume)
+            }
+            KernelKind::CubicSpline => {
+                let w = kernels::CubicSpline::new(h);
+                tension::calibrate(&w, &w, dx, volume)
+            }
+            KernelKind::Muller => {
+                let (w, g) = (kernels::Poly6::new(h), kernels::Spiky::new(h));
+                tension::calibrate(&w, &g, dx, volume)
+            }
+        }
     }
 
     /// Layers of wall particles needed so a particle at a wall has a full neighbourhood.
@@ -438,6 +472,8 @@ impl SphParams {
             dfsph: self.dfsph,
             volume: self.particle_mass() / self.rest_density,
             gradient_scale: self.gradient_scale(),
+            surface_tension: self.surface_tension,
+            surface: self.surface_calibration(),
         })
     }
 }
@@ -502,6 +538,11 @@ mod tests {
             (
                 "artificial_viscosity",
                 Box::new(|p| p.artificial_viscosity = f32::INFINITY),
+            ),
+            ("surface_tension", Box::new(|p| p.surface_tension = -0.07)),
+            (
+                "surface_tension",
+                Box::new(|p| p.surface_tension = f32::NAN),
             ),
             ("particle_spacing", Box::new(|p| p.particle_spacing = 0.0)),
             ("support_ratio", Box::new(|p| p.support_ratio = 0.9)),

@@ -428,7 +428,8 @@ fn fluid_presets(ui: &mut egui::Ui, p: &mut SphParams, liquid: &mut LiquidStyle)
     });
 }
 
-/// The material and the scene: density, equation of state, viscosity, kernel, gravity, tank.
+/// The material and the scene: density, equation of state, viscosity, surface tension, kernel,
+/// gravity, tank.
 fn fluid_material(ui: &mut egui::Ui, p: &mut SphParams) {
     for row in [
         &SphParams::REST_DENSITY,
@@ -437,6 +438,7 @@ fn fluid_material(ui: &mut egui::Ui, p: &mut SphParams) {
         &SphParams::BACKGROUND_PRESSURE,
         &SphParams::KINEMATIC_VISCOSITY,
         &SphParams::ARTIFICIAL_VISCOSITY,
+        &SphParams::SURFACE_TENSION,
         &SphParams::SUPPORT_RATIO,
     ] {
         field_slider(ui, p, row);

@@ -62,6 +62,24 @@ pub struct SphConstants {
     /// of a linear field exact on the rest lattice (about 1.05 at 2.5 spacings), so hydrostatic
     /// pressure comes out at `ρ₀g` per metre instead of a few percent high.
     pub gradient_scale: f32,
+    /// Surface tension `σ`, N/m (0: none; see `sim::tension`).
+    pub surface_tension: f32,
+    /// How a flat surface of the rest lattice reads, for the tension pass.
+    pub surface: SurfaceCalibration,
+}
+
+/// How the colour gradient of the rest lattice reads at a flat free surface.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct SurfaceCalibration {
+    /// `|∇c|` of the top row, 1/m.
+    pub top_row: f32,
+    /// `S = Σₖ V |nₖ| / Δx` over the rows that are on the surface (at least
+    /// `SURFACE_FRACTION` of the top row): the share of the surface's delta function that
+    /// the particles carry, dimensionless.
+    pub integral: f32,
+    /// The factor that brings the surface stress's pull between lattice neighbours, held at
+    /// close range against pairing, back to the kernel's.
+    pub held: f32,
 }
 
 /// The pressure solver.

@@ -33,5 +33,6 @@ pub mod region;
 pub mod simd;
 pub mod solid;
 pub mod step;
+pub mod tension;
 pub mod wcsph;
 pub mod world;

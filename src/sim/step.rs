@@ -19,6 +19,7 @@ use super::layout::{FluidSnapshot, Walls};
 use super::parallel::{CHUNK, Parallel, run_jobs};
 use super::profile::{StageProfile, SubstepPart};
 use super::solid::{MovingSolid, SolidMotion, SolidResponse};
+use super::tension::{SurfaceTension, capillary_time_step};
 use super::wcsph::Wcsph;
 use bevy::math::Vec2;
 
@@ -315,6 +316,8 @@ pub struct FluidStep {
     pub shared: Shared,
     /// The pressure solver's own state.
     pub solver: SolverState,
+    /// The surface tension pass's scratch.
+    tension: SurfaceTension,
 }
 
 impl FluidStep {
@@ -333,6 +336,7 @@ impl FluidStep {
                 profile: None,
             },
             solver: SolverState::new(constants.solver),
+            tension: SurfaceTension::default(),
         }
     }
 
@@ -515,7 +519,8 @@ impl FluidStep {
             Stage::Forces => self.timed(SubstepPart::Forces, |step| {
                 let s = &mut step.shared;
                 with_solver!(&mut step.solver, |solver| solver
-                    .forces(s, particles, parallel))
+                    .forces(s, particles, parallel));
+                step.non_pressure_forces(particles, parallel);
             }),
             Stage::Integrate => {
                 let dt = self.timed(SubstepPart::Integrate, |step| {
@@ -546,6 +551,24 @@ impl FluidStep {
         }
     }
 
+    /// The shared non-pressure passes of [`Stage::Forces`] after the solver's: surface tension,
+    /// added by sorted slot and to each particle's acceleration.
+    fn non_pressure_forces(&mut self, particles: &mut Particles, parallel: &impl Parallel) {
+        let s = &mut self.shared;
+        let (c, snapshot, walls) = (&s.constants, &s.snapshot, &s.walls);
+        let Some(tension) = self.tension.accelerations(c, snapshot, walls, parallel) else {
+            return;
+        };
+        for (a, pull) in s.accelerations.iter_mut().zip(tension) {
+            *a += *pull;
+        }
+        let slot_of = snapshot.grid().slot_of();
+        for_each_particle(particles, parallel, |i, p| {
+            *p.acceleration += tension[slot_of[i] as usize];
+            0
+        });
+    }
+
     /// Runs `work`, adding its wall time to `part` of the profile when one is on.
     #[inline]
     fn timed<R>(&mut self, part: SubstepPart, work: impl FnOnce(&mut Self) -> R) -> R {
@@ -563,7 +586,8 @@ impl FluidStep {
         let max_acceleration =
             max_length(&particles.acceleration).max(core::mem::take(&mut s.outsider_acceleration));
         let stable = with_solver!(&mut self.solver, |solver| solver
-            .step_limit(s, max_acceleration));
+            .step_limit(s, max_acceleration))
+        .min(capillary_time_step(&s.constants));
         s.clock.max_acceleration = max_acceleration;
         let empty = particles.is_empty();
         let max_substeps = s.constants.max_substeps;

@@ -237,3 +237,13 @@ fn reference_slices_are_deterministic_across_thread_counts() {
     let positions = block(1).positions_for(&p);
     check_slices_across_thread_counts(&p, &positions, 5);
 }
+
+#[test]
+fn slices_with_surface_tension_are_deterministic_across_thread_counts() {
+    let p = SphParams {
+        surface_tension: 0.072,
+        ..dfsph_fine()
+    };
+    let positions = block(1).positions_for(&p);
+    check_slices_across_thread_counts(&p, &positions, 5);
+}

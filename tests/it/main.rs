@@ -17,6 +17,7 @@ mod schedule;
 mod soak;
 mod solids;
 mod sources_and_sensors;
+mod surface_tension;
 #[path = "../../examples/validation/mod.rs"]
 mod validation;
 #[cfg(all(feature = "avian", feature = "render"))]
