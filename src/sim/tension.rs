@@ -231,15 +231,18 @@ fn stress_divergence<K: RadialKernel, G: RadialKernel>(
             continue;
         }
         points.for_each_batch(x, |first, dx, dy, r2| {
+            let neighbours: [Vec2; 4] = core::array::from_fn(|lane| match fluid {
+                true => normals.get(first + lane).copied().unwrap_or_default(),
+                false => Vec2::ZERO,
+            });
+            // Inside the liquid no one carries a stress: no kernel work.
+            if ni == Vec2::ZERO && neighbours.iter().all(|&n| n == Vec2::ZERO) {
+                return;
+            }
             let slopes = slopes(g, c, r2).to_array();
             let values = w.value_sq_x4(r2).to_array();
             let (dx, dy) = (dx.to_array(), dy.to_array());
-            for lane in 0..4 {
-                let nj = if fluid {
-                    normals.get(first + lane).copied().unwrap_or_default()
-                } else {
-                    Vec2::ZERO
-                };
+            for (lane, &nj) in neighbours.iter().enumerate() {
                 if slopes[lane] == 0.0 || (ni == Vec2::ZERO && nj == Vec2::ZERO) {
                     continue;
                 }
