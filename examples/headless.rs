@@ -13,6 +13,9 @@
 //!     --duration 1 --every 0.01 --seed 1 --out dam_break.csv
 //! cargo run --release --example headless -- --scenario drop --gravity 0 --column-width 0.05 \
 //!     --column-height 0.025 --tank-width 0.2 --tank-height 0.2 --spacing 0.001 --out drop.csv
+//! cargo run --release --example headless -- --scenario sessile --surface-tension 0.072 \
+//!     --contact-angle 45 --column-width 0.003 --tank-width 0.012 --tank-height 0.006 \
+//!     --out sessile.csv
 //! ```
 
 use bevy::prelude::*;
@@ -97,6 +100,10 @@ struct Cli {
     /// Surface tension, N/m (water: 0.072; 0: none; experimental).
     #[arg(long, default_value_t = 0.0, value_parser = non_negative)]
     surface_tension: f32,
+    /// Contact angle of the liquid on the tank's walls, degrees through the liquid (0–180;
+    /// under 90 it wets, over 90 it beads; acts with --surface-tension).
+    #[arg(long, default_value_t = 90.0, value_parser = angle)]
+    contact_angle: f32,
     /// Compute threads [default: all cores].
     #[arg(long)]
     threads: Option<usize>,
@@ -187,6 +194,9 @@ enum Scenario {
     /// A block `--column-width` by `--column-height` centred in the tank, released (with
     /// `--gravity 0`, a weightless drop).
     Drop,
+    /// A round drop `--column-width` across resting on the middle of the tank's floor,
+    /// released (with --surface-tension and --contact-angle, it spreads or beads to the angle).
+    Sessile,
 }
 
 /// The fluid's pressure solver.
@@ -230,6 +240,20 @@ fn non_negative(text: &str) -> Result<f32, String> {
     }
 }
 
+/// An angle in degrees, 0 to 180.
+fn angle(text: &str) -> Result<f32, String> {
+    let value: f32 = text
+        .parse()
+        .map_err(|_| format!("cannot read '{text}' as a number"))?;
+    if (0.0..=180.0).contains(&value) {
+        Ok(value)
+    } else {
+        Err(format!(
+            "must be an angle from 0 to 180 degrees, got {value}"
+        ))
+    }
+}
+
 /// Exits with `message`, the usage and status 2, as for any other bad argument.
 fn refuse(message: impl std::fmt::Display) -> ! {
     Cli::command()
@@ -250,6 +274,8 @@ fn progress(len: u64, unit: &str) -> ProgressBar {
 struct Config {
     params: SphParams,
     block: FluidBlock,
+    /// Only the disc inscribed in the block (sessile).
+    round: bool,
     #[cfg_attr(
         not(feature = "avian"),
         expect(dead_code, reason = "the float scenario is built with avian")
@@ -287,6 +313,14 @@ fn configure(cli: &Cli) -> Result<Config, String> {
             let corner = Vec2::new(tank.width - w, tank.height - h) / 2.0;
             (FluidBlock::new(corner, Vec2::new(w, h)), h, w / 40.0)
         }
+        Scenario::Sessile => {
+            let d = cli.column_width;
+            if d >= tank.width || d >= tank.height {
+                return Err(format!("the {d} m drop does not fit inside the tank"));
+            }
+            let corner = Vec2::new((tank.width - d) / 2.0, 0.0);
+            (FluidBlock::new(corner, Vec2::splat(d)), d, d / 20.0)
+        }
         Scenario::Galaxy => return Err("the galaxy scenario has no fluid".into()),
         Scenario::Tank | Scenario::Float => {
             let depth = cli.depth;
@@ -319,6 +353,7 @@ fn configure(cli: &Cli) -> Result<Config, String> {
         kinematic_viscosity: cli.viscosity,
         artificial_viscosity: cli.alpha,
         surface_tension: cli.surface_tension,
+        contact_angle: cli.contact_angle,
         gravity: Vec2::new(0.0, -cli.gravity),
         tank: Some(tank),
         max_substeps: 100_000,
@@ -356,6 +391,7 @@ fn configure(cli: &Cli) -> Result<Config, String> {
         params,
         body,
         block: block.with_jitter(cli.jitter).with_seed(cli.seed),
+        round: cli.scenario == Scenario::Sessile,
         duration: cli.duration,
         every: cli.every,
         out: cli.out.clone(),
@@ -403,6 +439,22 @@ fn main() {
     }
 }
 
+/// The scenario's fluid particles: the block's, or the disc inscribed in it.
+fn spawn_fluid(config: &Config, world: &mut World) -> Vec<Entity> {
+    if !config.round {
+        return config.block.spawn(world);
+    }
+    let block = &config.block;
+    let (centre, radius) = (block.min + block.size / 2.0, block.size.min_element() / 2.0);
+    let positions = block.positions_for(&config.params);
+    let inside = positions
+        .into_iter()
+        .filter(|p| p.distance(centre) < radius);
+    world
+        .spawn_batch(inside.map(|p| (FluidParticle, Position(p))))
+        .collect()
+}
+
 fn record(config: &Config) -> std::io::Result<()> {
     // Whole ticks of at most 1/60 s per frame, so frames fall exactly on tick boundaries.
     let ticks_per_frame = (config.every * 60.0).ceil().max(1.0) as u32;
@@ -414,7 +466,7 @@ fn record(config: &Config) -> std::io::Result<()> {
     ))
     .insert_resource(Time::<Fixed>::from_duration(tick))
     .insert_resource(TimeUpdateStrategy::FixedTimesteps(1));
-    let ids = config.block.spawn(app.world_mut());
+    let ids = spawn_fluid(config, app.world_mut());
     #[cfg(feature = "avian")]
     let body = config
         .body

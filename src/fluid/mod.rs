@@ -31,8 +31,8 @@ pub use params::{SphParams, SphParamsError};
 pub use resources::{SphParamsStatus, SphSolver, SphStats};
 pub(crate) use solids::pose_of;
 pub use solids::{
-    FluidForce, SOLID_ENTER_FRACTION, SOLID_LEAVE_FRACTION, Solid, SolidDynamics, SolidEntered,
-    SolidLeft, SolidVelocity, Submerged,
+    ContactAngle, FluidForce, SOLID_ENTER_FRACTION, SOLID_LEAVE_FRACTION, Solid, SolidDynamics,
+    SolidEntered, SolidLeft, SolidVelocity, Submerged,
 };
 pub(crate) use stats::update_stats;
 
@@ -149,6 +149,7 @@ impl Plugin for SphPlugin {
             .register_type::<Solid>()
             .register_type::<SolidVelocity>()
             .register_type::<SolidDynamics>()
+            .register_type::<ContactAngle>()
             .register_type::<FluidForce>()
             .register_type::<Submerged>()
             .add_message::<SolidEntered>()

@@ -76,6 +76,11 @@ pub struct SphParams {
     /// at its Rayleigh period, but its Laplace pressure reads about 40% high), and it shortens
     /// the sub-step to the capillary limit `√(ρ₀Δx³/2πσ)`.
     pub surface_tension: f32,
+    /// The contact angle of the liquid on the tank's walls and on every solid without one of
+    /// its own, degrees through the liquid, 0–180: under 90 the liquid wets (clings, spreads
+    /// into a film), over 90 it beads; 90, the default, is neutral. It acts only with
+    /// [`surface_tension`](Self::surface_tension): the surface meets a wall at this angle.
+    pub contact_angle: f32,
 }
 
 impl Default for SphParams {
@@ -128,6 +133,8 @@ impl SphParams {
     pub const ARTIFICIAL_VISCOSITY: ParamField<Self> = param_field!(artificial_viscosity, "artificial viscosity α", "", (0.0, 10.0), false, (0.0, 1.0), false);
     /// [`surface_tension`](Self::surface_tension).
     pub const SURFACE_TENSION: ParamField<Self> = param_field!(surface_tension, "surface tension σ", "N/m", (0.0, 100.0), false, (0.0, 0.5), false);
+    /// [`contact_angle`](Self::contact_angle).
+    pub const CONTACT_ANGLE: ParamField<Self> = param_field!(contact_angle, "contact angle θ", "°", (0.0, 180.0), false, (0.0, 180.0), false);
     /// [`support_ratio`](Self::support_ratio).
     pub const SUPPORT_RATIO: ParamField<Self> = param_field!(support_ratio, "support H/Δx", "spacings", (1.5, 5.0), false, (1.5, 5.0), false);
     /// The x part of [`gravity`](Self::gravity), for the panel: not in the table's
@@ -175,6 +182,7 @@ impl ParamTable for SphParams {
         Self::KINEMATIC_VISCOSITY,
         Self::ARTIFICIAL_VISCOSITY,
         Self::SURFACE_TENSION,
+        Self::CONTACT_ANGLE,
         Self::SUPPORT_RATIO,
         Self::CFL_NUMBER,
         Self::MAX_SUBSTEPS,
@@ -215,6 +223,7 @@ impl SphParams {
             solver: PressureSolver::Dfsph,
             dfsph: DfsphSettings::default(),
             surface_tension: 0.0,
+            contact_angle: 90.0,
         }
     }
 
@@ -473,6 +482,7 @@ impl SphParams {
             volume: self.particle_mass() / self.rest_density,
             gradient_scale: self.gradient_scale(),
             surface_tension: self.surface_tension,
+            wetting: self.contact_angle.to_radians().cos(),
             surface: self.surface_calibration(),
         })
     }
@@ -544,6 +554,9 @@ mod tests {
                 "surface_tension",
                 Box::new(|p| p.surface_tension = f32::NAN),
             ),
+            ("contact_angle", Box::new(|p| p.contact_angle = -1.0)),
+            ("contact_angle", Box::new(|p| p.contact_angle = 181.0)),
+            ("contact_angle", Box::new(|p| p.contact_angle = f32::NAN)),
             ("particle_spacing", Box::new(|p| p.particle_spacing = 0.0)),
             ("support_ratio", Box::new(|p| p.support_ratio = 0.9)),
             ("support_ratio", Box::new(|p| p.support_ratio = 12.0)),

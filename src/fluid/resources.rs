@@ -64,6 +64,17 @@ impl SphSolver {
         self.step.solids().get(k).map(|s| s.motion())
     }
 
+    /// The contact angle the fluid takes on the [`Solid`](super::Solid) of entity `solid`,
+    /// degrees: its valid [`ContactAngle`](super::ContactAngle), or the tank's
+    /// ([`SphParams::contact_angle`](super::SphParams::contact_angle)); `None` if the fluid
+    /// holds no such solid.
+    pub fn solid_contact_angle(&self, solid: Entity) -> Option<f32> {
+        let k = self.solids.position(solid)?;
+        let solid = self.step.solids().get(k)?;
+        let tank = self.step.constants().wetting.acos().to_degrees();
+        Some(solid.contact_angle().unwrap_or(tank))
+    }
+
     /// Switches on the [`StageProfile`] of the sub-steps (each part's wall time from now on),
     /// or off with `None`.
     pub fn set_stage_profile(&mut self, profile: Option<StageProfile>) {

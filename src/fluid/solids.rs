@@ -40,6 +40,15 @@ impl Solid {
     }
 }
 
+/// The liquid's contact angle on a [`Solid`], degrees through the liquid, 0–180: under 90 it
+/// wets the solid (clings, spreads into a film), over 90 it beads. Without it the solid takes
+/// the tank's, [`SphParams::contact_angle`](crate::fluid::SphParams::contact_angle). It acts
+/// only with surface tension ([`SphParams::surface_tension`](crate::fluid::SphParams::surface_tension));
+/// an angle out of range is refused with a warning, and the solid keeps the tank's.
+#[derive(Component, Reflect, Debug, Clone, Copy, PartialEq)]
+#[reflect(Component, Debug, PartialEq)]
+pub struct ContactAngle(pub f32);
+
 /// A [`Solid`]'s velocities: of its centre of mass (m/s) and about it (rad/s,
 /// counter-clockwise). Without this component the fluid takes them from the change of pose.
 #[derive(Component, Reflect, Debug, Clone, Copy, Default, PartialEq)]
@@ -146,6 +155,7 @@ type SolidItem<'a> = (
     &'a Transform,
     Option<&'a SolidVelocity>,
     Option<&'a SolidDynamics>,
+    Option<&'a ContactAngle>,
 );
 
 /// Hands the solids to the fluid: re-samples them when one was added, removed or changed (or
@@ -175,7 +185,7 @@ pub(crate) fn sync_solids(
     }
     let dt = time.delta_secs();
     let index = &mut solver.solids;
-    for (entity, solid, transform, velocity, dynamics) in &solids {
+    for (entity, solid, transform, velocity, dynamics, angle) in &solids {
         let Some(k) = index.position(entity) else {
             continue;
         };
@@ -203,6 +213,14 @@ pub(crate) fn sync_solids(
         if !solver.step.set_solid_response(k, dynamics.map(|d| d.0)) {
             warn!("solid {entity}: its dynamics are not finite; it keeps its velocity");
         }
+        let angle = angle.map(|a| a.0);
+        let valid = angle.filter(|a| (0.0..=180.0).contains(a));
+        if valid != angle {
+            warn_once!(
+                "solid {entity}: contact angle {angle:?}° is outside 0–180; it takes the tank's"
+            );
+        }
+        solver.step.set_solid_contact_angle(k, valid);
     }
 }
 

@@ -439,6 +439,7 @@ fn fluid_material(ui: &mut egui::Ui, p: &mut SphParams) {
         &SphParams::KINEMATIC_VISCOSITY,
         &SphParams::ARTIFICIAL_VISCOSITY,
         &SphParams::SURFACE_TENSION,
+        &SphParams::CONTACT_ANGLE,
         &SphParams::SUPPORT_RATIO,
     ] {
         field_slider(ui, p, row);

@@ -64,6 +64,8 @@ pub struct SphConstants {
     pub gradient_scale: f32,
     /// Surface tension `σ`, N/m (0: none; see `sim::tension`).
     pub surface_tension: f32,
+    /// `cos θ` of the contact angle on the tank's walls and on solids without one of their own.
+    pub wetting: f32,
     /// How a flat surface of the rest lattice reads, for the tension pass.
     pub surface: SurfaceCalibration,
 }

@@ -343,6 +343,9 @@ pub(crate) struct Walls {
     pub data: NeighborData,
     /// The solids, whose boundary particles follow the tank's in input order.
     pub solids: Vec<MovingSolid>,
+    /// `cos θ` of each wall particle's contact angle, sorted; NaN where it is the tank's
+    /// ([`SphConstants::wetting`]).
+    pub wetting: Vec<f32>,
     /// Boundary particles of the tank, in input order.
     fixed: Vec<Vec2>,
     /// The solids' motions when they were last placed (`None`: place them again).
@@ -398,13 +401,19 @@ impl Walls {
         // Most fluid particles are far from every wall; let their wall queries end at once.
         self.points.grid.mark_occupied_blocks();
         self.data.reset(points.len(), c.rest_density);
+        self.wetting.clear();
+        self.wetting.resize(points.len(), f32::NAN);
         let mut first = self.fixed.len();
         for solid in &self.solids {
             let range = first..first + solid.len();
             let slots = &self.points.grid.slot_of()[range.clone()];
+            let wetting = solid
+                .contact_angle()
+                .map_or(f32::NAN, |a| a.to_radians().cos());
             for (&slot, &x) in slots.iter().zip(&points[range]) {
                 let v = solid.point_velocity(x);
                 (self.data.vx[slot as usize], self.data.vy[slot as usize]) = (v.x, v.y);
+                self.wetting[slot as usize] = wetting;
             }
             first += solid.len();
         }

@@ -543,6 +543,8 @@ pub struct MovingSolid {
     response: Option<SolidResponse>,
     /// The waterline of the last tick's end, m (`-∞`: dry).
     waterline: f32,
+    /// Its contact angle, degrees (`None`: the tank's).
+    contact_angle: Option<f32>,
 }
 
 impl MovingSolid {
@@ -581,7 +583,25 @@ impl MovingSolid {
             spacing,
             response: None,
             waterline: f32::NEG_INFINITY,
+            contact_angle: None,
         })
+    }
+
+    /// The liquid's contact angle on it, degrees through the liquid (`None`: the tank's,
+    /// `SphParams::contact_angle`).
+    pub fn contact_angle(&self) -> Option<f32> {
+        self.contact_angle
+    }
+
+    /// Sets the liquid's contact angle on it, degrees (0–180; `None`: the tank's); `false`,
+    /// changing nothing, if it is out of range. The fluid takes it when it next places its
+    /// solids (set it through [`SliceFluid::solids_mut`](super::world::SliceFluid::solids_mut)).
+    pub fn set_contact_angle(&mut self, degrees: Option<f32>) -> bool {
+        if degrees.is_some_and(|a| !(0.0..=180.0).contains(&a)) {
+            return false;
+        }
+        self.contact_angle = degrees;
+        true
     }
 
     /// The shape, in the solid's frame.

@@ -416,6 +416,22 @@ impl FluidStep {
             .is_some_and(|solid| solid.set_motion(motion))
     }
 
+    /// Sets the liquid's contact angle on solid `k`, degrees (`None`: the tank's;
+    /// [`MovingSolid::set_contact_angle`]), unless it has it already; `false` if it is out of
+    /// range or there is no such solid.
+    pub fn set_solid_contact_angle(&mut self, k: usize, degrees: Option<f32>) -> bool {
+        let walls = &mut self.shared.walls;
+        let Some(solid) = walls.solids.get_mut(k) else {
+            return false;
+        };
+        if solid.contact_angle() == degrees {
+            return true;
+        }
+        let set = solid.set_contact_angle(degrees);
+        walls.solids_changed();
+        set
+    }
+
     /// Sets how solid `k` answers the fluid within a tick ([`MovingSolid::set_response`]);
     /// `false` if a value is not finite or there is no such solid.
     pub fn set_solid_response(&mut self, k: usize, response: Option<SolidResponse>) -> bool {

@@ -27,6 +27,12 @@
 //!   ([`ISOTROPIC`]), which the pressure takes up inside the liquid, so the surface tension is
 //!   unchanged, and which pulls a lifted particle back.
 //!
+//! Walls wet by their contact angle θ (Young: the wetted wall pulls the contact line out with
+//! `σ cos θ`): the liquid along a wall carries a second stress, `−σ cos θ δ_w (I − n̂_w n̂_w)`,
+//! its delta the walls' part of the colour gradient. It is uniform along a wetted wall and
+//! acts where the wetted area ends, moving the contact line until the free surface meets the
+//! wall at θ.
+//!
 //! The pull is stable for steps under the capillary limit [`capillary_time_step`].
 
 use super::config::{SphConstants, SurfaceCalibration};
@@ -124,8 +130,8 @@ pub fn capillary_time_step(c: &SphConstants) -> f32 {
 /// The pass's scratch, by sorted slot.
 #[derive(Debug, Clone, Default)]
 pub struct SurfaceTension {
-    /// Colour gradients `nᵢ`, 1/m (inward); zero inside the liquid.
-    normals: Vec<Vec2>,
+    /// Each particle's surfaces: zero inside the liquid.
+    surfaces: Vec<Surface>,
     /// The pull, m/s².
     acceleration: Vec<Vec2>,
 }
@@ -144,24 +150,20 @@ impl SurfaceTension {
             return None;
         }
         let n = fluid.len();
-        self.normals.resize(n, Vec2::ZERO);
+        self.surfaces.resize(n, Surface::default());
         self.acceleration.resize(n, Vec2::ZERO);
         let threshold = SURFACE_FRACTION * c.surface.top_row;
         let pull =
             c.surface_tension * c.volume * c.surface.held / (c.surface.integral * c.rest_density);
         with_kernels!(c.kernel, c.support, |w, g| {
-            for_each_slot(&mut self.normals, parallel, |slot, normal| {
-                let gradient = colour_gradient(&g, c, fluid.points.get(slot), fluid, walls);
-                *normal = if gradient.length() >= threshold {
-                    gradient
-                } else {
-                    Vec2::ZERO
-                };
+            for_each_slot(&mut self.surfaces, parallel, |slot, surface| {
+                let colour = colour_gradient(&g, c, fluid.points.get(slot), fluid, walls);
+                *surface = colour.surface(threshold);
                 0.0
             });
-            let normals = &self.normals;
+            let surfaces = &self.surfaces;
             for_each_slot(&mut self.acceleration, parallel, |slot, a| {
-                *a = pull * stress_divergence((&w, &g), c, slot, (fluid, walls), normals);
+                *a = pull * stress_divergence((&w, &g), c, slot, (fluid, walls), surfaces);
                 0.0
             });
         });
@@ -169,24 +171,105 @@ impl SurfaceTension {
     }
 }
 
-/// `Σⱼ V ∇ᵢWᵢⱼ` at `x` over the fluid and the walls, 1/m: the inward normal of the surface,
-/// as long as a flat surface's top row reads [`SurfaceCalibration::top_row`].
+/// The colour gradient at a point: the fluid's and the walls' parts, and the walls' wetting.
+#[derive(Debug, Clone, Copy, Default)]
+struct Colour {
+    /// `Σⱼ V ∇ᵢWᵢⱼ` over the fluid, 1/m.
+    fluid: Vec2,
+    /// The same over the walls (counted as liquid), 1/m: towards the walls within reach.
+    wall: Vec2,
+    /// `cos θ` of the walls within reach, weighted by their gradients.
+    wetting: f32,
+}
+
+impl Colour {
+    /// The surfaces this colour gradient marks, each where its gradient reaches `threshold`
+    /// (1/m): the free surface, whose normal is the whole gradient (the walls counted as
+    /// liquid, so the liquid along a wall has none), and the wetted wall, whose normal is the
+    /// walls' part.
+    fn surface(&self, threshold: f32) -> Surface {
+        let free = self.fluid + self.wall;
+        let wetted = self.wall.length() >= threshold;
+        Surface {
+            normal: if free.length() >= threshold {
+                free
+            } else {
+                Vec2::ZERO
+            },
+            wall: if wetted { self.wall } else { Vec2::ZERO },
+            wetting: if wetted { self.wetting } else { 0.0 },
+        }
+    }
+}
+
+/// One particle's share of the surfaces: the free surface's stress and the wetted wall's.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+struct Surface {
+    /// The free surface's colour gradient (inward), 1/m; zero inside the liquid.
+    normal: Vec2,
+    /// The walls' colour gradient (towards them), 1/m, where the liquid wets a wall.
+    wall: Vec2,
+    /// `cos θ` of that wall's contact angle.
+    wetting: f32,
+}
+
+impl Surface {
+    /// Whether it carries no stress.
+    fn is_inside(&self) -> bool {
+        self.normal == Vec2::ZERO && self.wall == Vec2::ZERO
+    }
+
+    /// `T · v`, per unit `σ δₛ`: the free surface's [`stress`] and the wetted wall's, a
+    /// tension `σ_sl − σ_sv = −σ cos θ` along the wall (Young: where the wall is wetted it
+    /// pulls the contact line out as hard as `σ cos θ`, so the free surface meets the wall at
+    /// θ).
+    #[inline]
+    fn stress(&self, v: Vec2) -> Vec2 {
+        let mut t = stress(self.normal, v);
+        let length = self.wall.length();
+        if length > 0.0 {
+            let along = v - self.wall * (self.wall.dot(v) / (length * length));
+            t -= self.wetting * length * along;
+        }
+        t
+    }
+}
+
+/// The [`Colour`] gradient at `x` over the fluid and the walls: the inward normal of the
+/// surface, as long as a flat surface's top row reads [`SurfaceCalibration::top_row`].
 fn colour_gradient<G: RadialKernel>(
     g: &G,
     c: &SphConstants,
     x: Vec2,
     fluid: &FluidSnapshot,
     walls: &Walls,
-) -> Vec2 {
-    let mut sum = Vec2::ZERO;
-    for points in [&fluid.points, &walls.points] {
-        points.for_each_batch(x, |_, dx, dy, r2| {
-            // ∇ᵢWᵢⱼ = W'/r (xᵢ − xⱼ), and (dx, dy) = xⱼ − xᵢ.
-            let slope = slopes(g, c, r2);
-            sum -= Vec2::new((slope * dx).element_sum(), (slope * dy).element_sum());
-        });
+) -> Colour {
+    let mut colour = Colour::default();
+    fluid.points.for_each_batch(x, |_, dx, dy, r2| {
+        // ∇ᵢWᵢⱼ = W'/r (xᵢ − xⱼ), and (dx, dy) = xⱼ − xᵢ.
+        let slope = slopes(g, c, r2);
+        colour.fluid -= Vec2::new((slope * dx).element_sum(), (slope * dy).element_sum());
+    });
+    let mut weight = 0.0;
+    walls.points.for_each_batch(x, |first, dx, dy, r2| {
+        let slope = slopes(g, c, r2);
+        colour.wall -= Vec2::new((slope * dx).element_sum(), (slope * dy).element_sum());
+        // |∇W| = |W'/r| r.
+        let magnitudes = (-slope * r2.max(Vec4::ZERO).sqrt()).to_array();
+        for (lane, &m) in magnitudes.iter().enumerate() {
+            if m > 0.0 {
+                let own = walls.wetting.get(first + lane).copied().unwrap_or(f32::NAN);
+                colour.wetting += m * if own.is_nan() { c.wetting } else { own };
+                weight += m;
+            }
+        }
+    });
+    colour.fluid *= c.volume;
+    colour.wall *= c.volume;
+    if weight > 0.0 {
+        colour.wetting /= weight;
     }
-    c.volume * sum
+    colour
 }
 
 /// `W'(r)/r` on four lanes of squared distances `r2`: zero at `r = 0` and beyond the support.
@@ -221,35 +304,35 @@ fn stress_divergence<K: RadialKernel, G: RadialKernel>(
     c: &SphConstants,
     slot: usize,
     (fluid, walls): (&FluidSnapshot, &Walls),
-    normals: &[Vec2],
+    surfaces: &[Surface],
 ) -> Vec2 {
-    let (x, ni) = (fluid.points.get(slot), normals[slot]);
+    let (x, si) = (fluid.points.get(slot), surfaces[slot]);
     let reference = 1.0 / w.value(c.spacing);
     let mut sum = Vec2::ZERO;
     for (points, fluid) in [(&fluid.points, true), (&walls.points, false)] {
-        if !fluid && ni == Vec2::ZERO {
+        if !fluid && si.is_inside() {
             continue;
         }
         points.for_each_batch(x, |first, dx, dy, r2| {
-            let neighbours: [Vec2; 4] = core::array::from_fn(|lane| match fluid {
-                true => normals.get(first + lane).copied().unwrap_or_default(),
-                false => Vec2::ZERO,
+            let neighbours: [Surface; 4] = core::array::from_fn(|lane| match fluid {
+                true => surfaces.get(first + lane).copied().unwrap_or_default(),
+                false => Surface::default(),
             });
             // Inside the liquid no one carries a stress: no kernel work.
-            if ni == Vec2::ZERO && neighbours.iter().all(|&n| n == Vec2::ZERO) {
+            if si.is_inside() && neighbours.iter().all(Surface::is_inside) {
                 return;
             }
             let slopes = slopes(g, c, r2).to_array();
             let values = w.value_sq_x4(r2).to_array();
             let (dx, dy) = (dx.to_array(), dy.to_array());
-            for (lane, &nj) in neighbours.iter().enumerate() {
-                if slopes[lane] == 0.0 || (ni == Vec2::ZERO && nj == Vec2::ZERO) {
+            for (lane, sj) in neighbours.iter().enumerate() {
+                if slopes[lane] == 0.0 || (si.is_inside() && sj.is_inside()) {
                     continue;
                 }
                 // ∇ᵢWᵢⱼ = −W'/r (xⱼ − xᵢ).
                 let held = hold(values[lane] * reference);
                 let v = -slopes[lane] * held * Vec2::new(dx[lane], dy[lane]);
-                sum += stress(ni, v) + stress(nj, v);
+                sum += si.stress(v) + sj.stress(v);
             }
         });
     }

@@ -242,6 +242,8 @@ fn reference_slices_are_deterministic_across_thread_counts() {
 fn slices_with_surface_tension_are_deterministic_across_thread_counts() {
     let p = SphParams {
         surface_tension: 0.072,
+        // The walls' wetted stress too.
+        contact_angle: 60.0,
         ..dfsph_fine()
     };
     let positions = block(1).positions_for(&p);

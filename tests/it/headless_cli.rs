@@ -61,6 +61,16 @@ fn bad_arguments_are_refused_with_the_usage() {
         &["--gravity", "-1"],
         &["--gravity", "nan"],
         &["--surface-tension", "-0.07"],
+        &["--contact-angle", "181"],
+        &["--contact-angle", "-5"],
+        &[
+            "--scenario",
+            "sessile",
+            "--column-width",
+            "0.5",
+            "--tank-height",
+            "0.4",
+        ],
         &[
             "--scenario",
             "drop",
@@ -288,6 +298,64 @@ fn surface_tension_rounds_a_weightless_block() {
     assert!(
         widths[1] < widths[0] - 0.002,
         "with tension it rounds up: {widths:?}"
+    );
+}
+
+/// The sessile scenario places a round drop `--column-width` across on the middle of the
+/// floor; with surface tension it spreads on walls it wets (45°) and beads on walls it does
+/// not (135°): after 0.1 s its base is more than 3 times as wide as it is high at 45° (a cap
+/// at rest: 4.8) and under 1.4 times at 135° (0.83; a half disc at 90°: 2).
+#[test]
+fn sessile_scenario_spreads_or_beads_with_the_contact_angle() {
+    let mut shapes = Vec::new();
+    for angle in ["45", "135"] {
+        let (_, rows) = record(
+            &format!("sessile_{angle}"),
+            &[
+                "--scenario",
+                "sessile",
+                "--surface-tension",
+                "0.072",
+                "--contact-angle",
+                angle,
+                "--column-width",
+                "0.003",
+                "--tank-width",
+                "0.012",
+                "--tank-height",
+                "0.006",
+                "--jitter",
+                "0",
+                "--duration",
+                "0.1",
+                "--every",
+                "0.1",
+            ],
+        );
+        let frame = |t: f64| rows.iter().filter(move |r| (r[0] - t).abs() < 1e-6);
+        // 20 particles across a disc: the default spacing is a twentieth of the diameter.
+        let count = frame(0.0).count();
+        assert!((290..=330).contains(&count), "{count} particles");
+        let lowest = frame(0.0).map(|r| r[3]).fold(f64::MAX, f64::min);
+        assert!(
+            (lowest - 0.000075).abs() < 1e-5,
+            "the drop rests on the floor: {lowest}"
+        );
+        let centre = frame(0.0).map(|r| r[2]).sum::<f64>() / count as f64;
+        assert!((centre - 0.006).abs() < 1e-4, "centred: {centre}");
+        let base = frame(0.1).filter(|r| r[3] < 0.00015).map(|r| r[2]);
+        let width = base.clone().fold(f64::MIN, f64::max) - base.fold(f64::MAX, f64::min);
+        let height = frame(0.1).map(|r| r[3]).fold(f64::MIN, f64::max);
+        shapes.push((width, height));
+    }
+    println!("(base width, height) at 45° and 135°: {shapes:?}");
+    assert!(
+        shapes[0].0 > 3.0 * shapes[0].1,
+        "at 45° it spreads: {shapes:?}"
+    );
+    assert!(
+        shapes[1].0 < 1.4 * shapes[1].1,
+        "at 135° it beads: {shapes:?}"
     );
 }
 

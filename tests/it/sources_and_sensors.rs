@@ -9,7 +9,9 @@ use crate::common::{TICK, create_app, run, spawn};
 use bevy::ecs::message::Messages;
 use bevy::ecs::system::SystemState;
 use bevy::prelude::*;
-use bevy_sph2d::fluid::{FluidParticle, Solid, SolidShape, SphParams, SphStats, Tank};
+use bevy_sph2d::fluid::{
+    ContactAngle, FluidParticle, Solid, SolidShape, SphParams, SphSolver, SphStats, Tank,
+};
 use bevy_sph2d::gameplay::{
     EmitterRate, FluidBlock, FluidDrain, FluidEmitter, FluidEntered, FluidLeft, FluidQuery,
     FluidRegion, FluidSensor,
@@ -300,6 +302,46 @@ fn a_solid_too_big_to_sample_is_refused_and_the_fluid_runs_on() {
     assert_eq!(particles(&mut app), before);
     assert_eq!(app.world().resource::<SphStats>().wall_particles, walls);
     assert_eq!(app.world().resource::<SphStats>().removed_escaped, 0);
+}
+
+/// A solid's [`ContactAngle`] reaches the fluid, changes with the component, and falls back
+/// to the tank's when it is removed or out of range.
+#[test]
+fn a_solids_contact_angle_follows_its_component() {
+    let mut app = resting_layer();
+    let plate = app
+        .world_mut()
+        .spawn((
+            Solid::new(SolidShape::rectangle(0.2, 0.04)),
+            ContactAngle(30.0),
+            Transform::from_xyz(0.5, 0.45, 0.0),
+        ))
+        .id();
+    let angle = |app: &App| {
+        let angle = app
+            .world()
+            .resource::<SphSolver>()
+            .solid_contact_angle(plate);
+        angle.expect("the fluid holds the plate")
+    };
+    run(&mut app, 1);
+    assert!((angle(&app) - 30.0).abs() < 1e-4);
+    app.world_mut()
+        .entity_mut(plate)
+        .insert(ContactAngle(150.0));
+    run(&mut app, 1);
+    assert!((angle(&app) - 150.0).abs() < 1e-4);
+    // The tank's, SphParams::contact_angle (90° by default).
+    app.world_mut()
+        .entity_mut(plate)
+        .insert(ContactAngle(200.0));
+    run(&mut app, 1);
+    assert!((angle(&app) - 90.0).abs() < 1e-3);
+    app.world_mut().entity_mut(plate).insert(ContactAngle(10.0));
+    run(&mut app, 1);
+    app.world_mut().entity_mut(plate).remove::<ContactAngle>();
+    run(&mut app, 1);
+    assert!((angle(&app) - 90.0).abs() < 1e-3);
 }
 
 #[test]

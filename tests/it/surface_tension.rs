@@ -3,9 +3,9 @@
 //! momentum.
 
 use bevy::math::Vec2;
-use bevy_sph2d::fluid::SphParams;
+use bevy_sph2d::fluid::{Pose, SolidShape, SphParams, Tank};
 use bevy_sph2d::gameplay::FluidBlock;
-use bevy_sph2d::slices::SliceFluid;
+use bevy_sph2d::slices::{MovingSolid, SliceFluid, SolidMotion};
 
 /// Water's surface tension, N/m.
 const SIGMA: f32 = 0.072;
@@ -90,4 +90,115 @@ fn a_weightless_block_oscillates_at_the_rayleigh_period() {
     let drift = drop.velocity.iter().sum::<Vec2>() / drop.len() as f32;
     assert!(drift.length() < 1e-4, "the drop drifts at {drift} m/s");
     assert_eq!(drop.non_finite(), 0);
+}
+
+/// A round drop `diameter` across (m) of water with a kinematic viscosity of 1e-4 m²/s (it
+/// settles within a tenth of a second), resting on the middle of the floor of a tank 4
+/// diameters wide under gravity, 20 particles across, with `tank` degrees on the tank's walls.
+fn sessile_drop(diameter: f32, tank: f32) -> SliceFluid {
+    let spacing = diameter / 20.0;
+    let params = SphParams {
+        particle_spacing: spacing,
+        tank: Some(Tank::new(4.0 * diameter, 2.0 * diameter)),
+        surface_tension: SIGMA,
+        contact_angle: tank,
+        kinematic_viscosity: 1.0e-4,
+        ..SphParams::water()
+    };
+    let radius = diameter / 2.0;
+    let centre = Vec2::new(2.0 * diameter, radius);
+    let block = FluidBlock::new(Vec2::new(centre.x - radius, 0.0), Vec2::splat(diameter));
+    let positions = block
+        .positions_for(&params)
+        .into_iter()
+        .filter(|p| p.distance(centre) < radius)
+        .collect();
+    SliceFluid::new(params.constants().expect("valid"), positions)
+}
+
+/// The contact angle of a drop on a floor at `floor` (m), degrees, from the circular cap
+/// through its top and the ends of its bottom row: `2 atan(height / half-base)` (the drop is
+/// small: its Bond number `ρgR²/σ` is 0.3).
+fn cap_angle(f: &SliceFluid, floor: f32) -> f32 {
+    let spacing = f.constants().spacing;
+    let top = f.position.iter().fold(floor, |m, p| m.max(p.y)) + spacing / 2.0 - floor;
+    let (left, right) = f
+        .position
+        .iter()
+        .filter(|p| p.y < floor + spacing)
+        .fold((f32::MAX, f32::MIN), |(l, r), p| (l.min(p.x), r.max(p.x)));
+    let half = (right - left) / 2.0 + spacing / 2.0;
+    2.0 * (top / half).atan().to_degrees()
+}
+
+/// Runs `f` for a second and returns the mean cap angle over its second half, checking that
+/// nothing flew off or sank below the `floor`.
+fn settled_angle(f: &mut SliceFluid, floor: f32, diameter: f32) -> f32 {
+    let (mut sum, mut count) = (0.0, 0);
+    for k in 1..=100 {
+        f.advance(0.01);
+        if k > 50 {
+            sum += cap_angle(f, floor);
+            count += 1;
+        }
+    }
+    for p in &f.position {
+        assert!(
+            p.y > floor && p.y < floor + diameter,
+            "a particle left the drop: {p}"
+        );
+    }
+    assert_eq!(f.non_finite(), 0);
+    sum / count as f32
+}
+
+/// A 3 mm drop of water placed on the tank's floor spreads or beads to the walls' contact
+/// angle: within 15° of 45°, 90° and 135°.
+#[test]
+fn a_small_drop_on_the_floor_takes_the_tanks_contact_angle() {
+    let diameter = 0.003;
+    for target in [45.0, 90.0, 135.0] {
+        let mut drop = sessile_drop(diameter, target);
+        let angle = settled_angle(&mut drop, 0.0, diameter);
+        println!("tank at {target}°: the drop settles at {angle:.1}°");
+        assert!(
+            (angle - target).abs() < 15.0,
+            "contact angle {angle:.1}° against {target}°"
+        );
+    }
+}
+
+/// A solid's own contact angle wins over the tank's: the same drop on a plate that it wets at
+/// 135° (the tank's walls at 45°) beads.
+#[test]
+fn a_solids_contact_angle_overrides_the_tanks() {
+    let diameter = 0.003;
+    let mut drop = sessile_drop(diameter, 45.0);
+    let spacing = drop.constants().spacing;
+    // A plate 3 diameters wide along the floor, its top 2 spacings up; the drop is lifted
+    // onto it.
+    let (width, height) = (3.0 * diameter, 2.0 * spacing);
+    let mut plate = MovingSolid::new(
+        SolidShape::rectangle(width, height),
+        Vec2::ZERO,
+        spacing,
+        drop.constants().wall_layers,
+    )
+    .expect("a valid plate");
+    plate.set_motion(SolidMotion {
+        pose: Pose {
+            position: Vec2::new(2.0 * diameter, height / 2.0),
+            angle: 0.0,
+        },
+        ..Default::default()
+    });
+    assert!(plate.set_contact_angle(Some(135.0)));
+    assert!(!plate.set_contact_angle(Some(181.0)), "out of range");
+    drop.solids_mut().push(plate);
+    for p in drop.position.iter_mut() {
+        p.y += height;
+    }
+    let angle = settled_angle(&mut drop, height, diameter);
+    println!("plate at 135°, tank at 45°: the drop settles at {angle:.1}°");
+    assert!((angle - 135.0).abs() < 15.0, "contact angle {angle:.1}°");
 }
