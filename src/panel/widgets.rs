@@ -31,7 +31,8 @@ pub(super) fn slider<'a>(
     };
     egui::Slider::new(value, range)
         .logarithmic(logarithmic)
-        .clamping(egui::SliderClamping::Always)
+        // A value outside the slider (set by the game) stays as it is until dragged.
+        .clamping(egui::SliderClamping::Edits)
         .text(text)
 }
 
