@@ -45,16 +45,15 @@ const DRIP_PERIOD: f32 = 1.0;
 
 /// Water at 1 mm spacing with surface tension, on the default solver: the capillary length
 /// (2.7 mm) is almost three spacings, so drops of a few millimetres bead; the sub-step keeps
-/// under the capillary limit (1.5 ms) and at most 40 run a tick. The speed of sound only
-/// scales the artificial viscosity under DFSPH: at 10 m/s its step limit stays above the
-/// capillary one.
+/// under the capillary limit (1.5 ms) and at most 40 run a tick. The speed of sound is
+/// water's default: under DFSPH it only scales the artificial viscosity, which damps the
+/// surface's noise at the scale of a particle (at 10 m/s drops shed stray particles).
 fn droplet_params() -> SphParams {
     SphParams {
         tank: Some(Tank::new(BOX.x, BOX.y)),
         particle_spacing: 0.001,
         surface_tension: 0.072,
         contact_angle: 90.0,
-        speed_of_sound: 10.0,
         max_substeps: 40,
         ..SphParams::water()
     }

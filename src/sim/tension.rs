@@ -31,7 +31,8 @@
 //! `σ cos θ`): the liquid along a wall carries a second stress, `−σ cos θ δ_w (I − n̂_w n̂_w)`,
 //! its delta the walls' part of the colour gradient. It is uniform along a wetted wall and
 //! acts where the wetted area ends, moving the contact line until the free surface meets the
-//! wall at θ.
+//! wall at θ. Across the wall the same liquid is pulled to it ([`ADHESION`]), so that what
+//! wets a ceiling hangs from it.
 //!
 //! The pull is stable for steps under the capillary limit [`capillary_time_step`].
 
@@ -51,6 +52,13 @@ pub const SURFACE_FRACTION: f32 = 0.25;
 /// docs). Measured on a weightless 2:1 block of 1,257 particles: at 0.5 a particle left the
 /// drop within a second; at 1 none did in 3 s.
 pub const ISOTROPIC: f32 = 1.0;
+
+/// The wetted wall's pull towards the wall, per unit `σ δ_w (1 + cos θ)`, which the wall
+/// particles exert on the liquid next to them: it holds the liquid that wets a wall to it, and
+/// leaves the contact angle as it is. Measured on a 3 mm drop touching the ceiling: it hangs
+/// at 30° and falls at 150° (without the pull it falls at both); drops on a floor settle
+/// within 1.2° of where they do without it.
+pub const ADHESION: f32 = 0.0625;
 
 /// `ε` of [`hold`]: above 0.13 a pair's pull grows as it stretches from a spacing (Wendland C2,
 /// two spacings' support).
@@ -233,6 +241,21 @@ impl Surface {
         }
         t
     }
+
+    /// With a wall particle: [`stress`](Self::stress) and a pull towards the wall,
+    /// [`ADHESION`] `(1 + cos θ)` across it (the work of adhesion is `σ (1 + cos θ)`), which
+    /// only the walls exert (between liquid particles it would be a tension across the wall
+    /// band, which pairs them up and throws them off).
+    #[inline]
+    fn wall_stress(&self, v: Vec2) -> Vec2 {
+        let length = self.wall.length();
+        let across = if length > 0.0 {
+            ADHESION * (1.0 + self.wetting) * self.wall * (self.wall.dot(v) / length)
+        } else {
+            Vec2::ZERO
+        };
+        self.stress(v) + across
+    }
 }
 
 /// The [`Colour`] gradient at `x` over the fluid and the walls: the inward normal of the
@@ -332,7 +355,10 @@ fn stress_divergence<K: RadialKernel, G: RadialKernel>(
                 // ∇ᵢWᵢⱼ = −W'/r (xⱼ − xᵢ).
                 let held = hold(values[lane] * reference);
                 let v = -slopes[lane] * held * Vec2::new(dx[lane], dy[lane]);
-                sum += si.stress(v) + sj.stress(v);
+                sum += match fluid {
+                    true => si.stress(v) + sj.stress(v),
+                    false => si.wall_stress(v),
+                };
             }
         });
     }

@@ -202,3 +202,37 @@ fn a_solids_contact_angle_overrides_the_tanks() {
     println!("plate at 135°, tank at 45°: the drop settles at {angle:.1}°");
     assert!((angle - 135.0).abs() < 15.0, "contact angle {angle:.1}°");
 }
+
+/// The same 3 mm drop touching the ceiling instead: a ceiling it wets at 30° holds it (after
+/// half a second its centre is still within 1.5 mm of the ceiling, spread along it), one at
+/// 150° lets it fall to the floor.
+#[test]
+fn a_drop_hangs_from_a_ceiling_it_wets_and_falls_from_one_it_does_not() {
+    let diameter = 0.003;
+    for (angle, hangs) in [(30.0, true), (150.0, false)] {
+        let mut drop = sessile_drop(diameter, angle);
+        // Up against the ceiling, 2 diameters up.
+        let lift = 2.0 * diameter - diameter;
+        for p in drop.position.iter_mut() {
+            p.y += lift;
+        }
+        for _ in 0..50 {
+            drop.advance(0.01);
+        }
+        let centre = drop.position.iter().map(|p| p.y).sum::<f32>() / drop.len() as f32;
+        let below_ceiling = 2.0 * diameter - centre;
+        println!(
+            "ceiling at {angle}°: the centre is {:.2} mm below it",
+            below_ceiling * 1e3
+        );
+        if hangs {
+            assert!(
+                below_ceiling < 0.0015,
+                "it fell from a wetted ceiling: {below_ceiling} m"
+            );
+        } else {
+            assert!(below_ceiling > 0.004, "it clung at 150°: {below_ceiling} m");
+        }
+        assert_eq!(drop.non_finite(), 0);
+    }
+}
