@@ -346,6 +346,8 @@ pub(crate) struct Walls {
     /// `cos θ` of each wall particle's contact angle, sorted; NaN where it is the tank's
     /// ([`SphConstants::wetting`]).
     pub wetting: Vec<f32>,
+    /// Whether any wall particle has an angle of its own (a solid's).
+    pub own_wetting: bool,
     /// Boundary particles of the tank, in input order.
     fixed: Vec<Vec2>,
     /// The solids' motions when they were last placed (`None`: place them again).
@@ -417,6 +419,7 @@ impl Walls {
             }
             first += solid.len();
         }
+        self.own_wetting = self.solids.iter().any(|s| s.contact_angle().is_some());
         self.states.clear();
         self.states.resize(points.len(), WallState::default());
         self.scratch = points;
