@@ -11,16 +11,17 @@
 //! to run 5 simulated seconds without one and print the speed relative to real time, or
 //! `-- --screenshot droplets.png 8` to save the window after 8 simulated seconds and quit.
 
+mod demo;
+
 use bevy::prelude::*;
 use bevy::render::view::screenshot::{Screenshot, save_to_disk};
-use bevy::time::TimeUpdateStrategy;
 use bevy_sph2d::fluid::{ContactAngle, Solid, SolidShape, SphParams, SphPlugin, SphStats, Tank};
 use bevy_sph2d::gameplay::{
     EmitterRate, FluidDrain, FluidEmitter, FluidRegion, ScenarioKind, SphScenario,
 };
 use bevy_sph2d::render::{ParticleCamera, ParticleDraw, ParticleView, RenderMode};
 use bevy_sph2d::{ParticlePlugins, ParticleUiPlugins};
-use std::time::Instant;
+use demo::{headless_plugins, limit_catch_up, run_headless, window_plugins};
 
 /// The box, m.
 const BOX: Vec2 = Vec2::new(0.09, 0.05);
@@ -92,23 +93,13 @@ struct ScreenshotAt {
 
 /// The example in a window, with sprites drawn as liquid, the mouse tools and the panel.
 fn window(shot: Option<ScreenshotAt>) {
-    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
     let mut app = App::new();
     if let Some(shot) = shot {
         app.insert_resource(shot)
             .add_systems(Update, take_screenshot);
     }
     app.add_plugins((
-        DefaultPlugins
-            .set(WindowPlugin {
-                primary_window: Some(Window {
-                    title: "bevy_sph2d: droplets".into(),
-                    resolution: (1280, 720).into(),
-                    ..default()
-                }),
-                ..default()
-            })
-            .set(bevy_sph2d::task_pool_plugin(threads)),
+        window_plugins("bevy_sph2d: droplets"),
         ParticlePlugins::default().set(SphPlugin::default().with_params(droplet_params())),
         ParticleUiPlugins,
         DropletScene,
@@ -128,31 +119,13 @@ fn window(shot: Option<ScreenshotAt>) {
 
 /// Runs the scene for `seconds` of simulated time at 64 ticks a second, as fast as it goes.
 fn headless(seconds: f64) {
-    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
     let mut app = App::new();
     app.add_plugins((
-        MinimalPlugins.set(bevy_sph2d::task_pool_plugin(threads)),
-        TransformPlugin,
+        headless_plugins(),
         SphPlugin::default().with_params(droplet_params()),
         DropletScene,
-    ))
-    .insert_resource(TimeUpdateStrategy::FixedTimesteps(1));
-    app.update();
-    let ticks = (seconds * 64.0).ceil() as u32;
-    let started = Instant::now();
-    for _ in 0..ticks {
-        app.update();
-    }
-    let wall = started.elapsed().as_secs_f64();
-    let stats = app.world().resource::<SphStats>();
-    let sim = f64::from(ticks) / 64.0;
-    println!(
-        "droplets headless particles={} threads={threads} sim_s={sim:.2} wall_s={wall:.2} \
-         realtime_x={:.2} substeps={}",
-        stats.particles,
-        sim / wall,
-        stats.total_substeps,
-    );
+    ));
+    run_headless("droplets", app, seconds);
 }
 
 /// The scene: the plates, a tap over each and the drain.
@@ -209,12 +182,6 @@ fn spawn_scene(mut commands: Commands) {
 
 fn spawn_camera(mut commands: Commands) {
     commands.spawn(ParticleCamera::default());
-}
-
-/// At most four fixed ticks a frame, as in the other demos: a slow frame runs the water slower
-/// instead of piling up ticks.
-fn limit_catch_up(mut time: ResMut<Time<Virtual>>) {
-    time.set_max_delta(core::time::Duration::from_secs_f64(4.0 / 64.0));
 }
 
 /// Saves the window once the simulation reaches the [`ScreenshotAt`] time, and quits a few

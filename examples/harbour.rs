@@ -12,10 +12,10 @@
 mod demo;
 
 use bevy::prelude::*;
-use bevy::time::TimeUpdateStrategy;
 use bevy_sph2d::prelude::*;
-use demo::{HarbourDemoPlugin, HarbourScene, harbour_params, window_plugins};
-use std::time::Instant;
+use demo::{
+    HarbourDemoPlugin, HarbourScene, harbour_params, headless_plugins, run_headless, window_plugins,
+};
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
@@ -34,34 +34,13 @@ fn main() {
 
 /// Runs the scene for `seconds` of simulated time at 64 ticks a second, as fast as it goes.
 fn headless(seconds: f64) {
-    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
     let mut app = App::new();
     app.add_plugins((
-        MinimalPlugins.set(bevy_sph2d::task_pool_plugin(threads)),
-        TransformPlugin,
+        headless_plugins(),
         SphPlugin::default().with_params(harbour_params()),
         avian2d::prelude::PhysicsPlugins::default(),
         FluidCouplingPlugin::with_tank_walls(),
         HarbourScene,
-    ))
-    .insert_resource(TimeUpdateStrategy::FixedTimesteps(1));
-    app.finish();
-    app.cleanup();
-    app.update();
-    let ticks = (seconds * 64.0).ceil() as u32;
-    let started = Instant::now();
-    for _ in 0..ticks {
-        app.update();
-    }
-    let wall = started.elapsed().as_secs_f64();
-    let stats = app.world().resource::<SphStats>();
-    let sim = f64::from(ticks) / 64.0;
-    println!(
-        "harbour headless particles={} threads={threads} sim_s={sim:.2} wall_s={wall:.2} \
-         realtime_x={:.2} substeps={} iterations={}",
-        stats.particles,
-        sim / wall,
-        stats.total_substeps,
-        stats.total_iterations
-    );
+    ));
+    run_headless("harbour", app, seconds);
 }

@@ -3,7 +3,7 @@
 //! two ways with avian2d rigid bodies. See [`HarbourDemoPlugin`] (the window) and
 //! [`HarbourScene`] (the scene alone, headless too).
 
-use super::MAX_FRAME_TIME;
+use super::limit_catch_up;
 use avian2d::prelude::{
     AngularVelocity, Collider, ColliderDensity, LinearVelocity, PhysicsPlugins, RigidBody,
 };
@@ -96,10 +96,6 @@ impl Plugin for HarbourDemoPlugin {
 
 fn spawn_camera(mut commands: Commands) {
     commands.spawn(ParticleCamera::default());
-}
-
-fn limit_catch_up(mut time: ResMut<Time<Virtual>>) {
-    time.set_max_delta(core::time::Duration::from_secs_f64(MAX_FRAME_TIME));
 }
 
 /// The water (clear of the paddle), the paddle and four bodies: a boat (relative density 0.3),

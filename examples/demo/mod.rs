@@ -1,8 +1,8 @@
-//! The examples' ready-made demo apps, shared by the `dam_break`, `record_gif` and `harbour`
-//! examples and the window test (`mod demo;`, or `#[path]` from `tests/`): a scenario in a
-//! tank, sprites, mouse tools and the panel (`SphDemoPlugin`), and with feature `avian` the
-//! harbour (`HarbourDemoPlugin`). Not part of the library: it is what a game built on the
-//! crate's public API looks like.
+//! The examples' ready-made demo apps, shared by the `dam_break`, `record_gif`, `harbour` and
+//! `droplets` examples and the window test (`mod demo;`, or `#[path]` from `tests/`): a
+//! scenario in a tank, sprites, mouse tools and the panel (`SphDemoPlugin`), with feature
+//! `avian` the harbour (`HarbourDemoPlugin`), and the headless runner (`run_headless`). Not
+//! part of the library: it is what a game built on the crate's public API looks like.
 
 #![allow(dead_code, reason = "each example uses a different part")]
 
@@ -103,6 +103,42 @@ fn start_demo(mut commands: Commands, mut resets: MessageWriter<ResetSimulation>
     resets.write(ResetSimulation);
 }
 
-fn limit_catch_up(mut time: ResMut<Time<Virtual>>) {
+/// Holds each frame to [`MAX_FRAME_TIME`] of virtual time (a `Startup` system).
+pub fn limit_catch_up(mut time: ResMut<Time<Virtual>>) {
     time.set_max_delta(core::time::Duration::from_secs_f64(MAX_FRAME_TIME));
+}
+
+/// `MinimalPlugins` on every core, for a scene run without a window by [`run_headless`].
+pub fn headless_plugins() -> (impl PluginGroup, TransformPlugin) {
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    (
+        MinimalPlugins.set(bevy_sph2d::task_pool_plugin(threads)),
+        TransformPlugin,
+    )
+}
+
+/// Runs `app` (a scene on [`headless_plugins`]) for `seconds` of simulated time at 64 ticks a
+/// second, as fast as it goes, and prints `name`'s speed relative to real time.
+pub fn run_headless(name: &str, mut app: App, seconds: f64) {
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    app.insert_resource(bevy::time::TimeUpdateStrategy::FixedTimesteps(1));
+    app.finish();
+    app.cleanup();
+    app.update();
+    let ticks = (seconds * 64.0).ceil() as u32;
+    let started = std::time::Instant::now();
+    for _ in 0..ticks {
+        app.update();
+    }
+    let wall = started.elapsed().as_secs_f64();
+    let stats = app.world().resource::<bevy_sph2d::fluid::SphStats>();
+    let sim = f64::from(ticks) / 64.0;
+    println!(
+        "{name} headless particles={} threads={threads} sim_s={sim:.2} wall_s={wall:.2} \
+         realtime_x={:.2} substeps={} iterations={}",
+        stats.particles,
+        sim / wall,
+        stats.total_substeps,
+        stats.total_iterations
+    );
 }
