@@ -216,42 +216,39 @@ enum Kernel {
     Muller,
 }
 
-/// A finite positive number.
-fn positive(text: &str) -> Result<f32, String> {
+/// `text` read as a number that passes `accept`; otherwise why not, `must` saying what it must be.
+fn number(text: &str, accept: impl Fn(f32) -> bool, must: &str) -> Result<f32, String> {
     let value: f32 = text
         .parse()
         .map_err(|_| format!("cannot read '{text}' as a number"))?;
-    if value.is_finite() && value > 0.0 {
+    if accept(value) {
         Ok(value)
     } else {
-        Err(format!("must be a positive number, got {value}"))
+        Err(format!("must be {must}, got {value}"))
     }
+}
+
+/// A finite positive number.
+fn positive(text: &str) -> Result<f32, String> {
+    number(text, |v| v.is_finite() && v > 0.0, "a positive number")
 }
 
 /// A finite number, zero or more.
 fn non_negative(text: &str) -> Result<f32, String> {
-    let value: f32 = text
-        .parse()
-        .map_err(|_| format!("cannot read '{text}' as a number"))?;
-    if value.is_finite() && value >= 0.0 {
-        Ok(value)
-    } else {
-        Err(format!("must be zero or a positive number, got {value}"))
-    }
+    number(
+        text,
+        |v| v.is_finite() && v >= 0.0,
+        "zero or a positive number",
+    )
 }
 
 /// An angle in degrees, 0 to 180.
 fn angle(text: &str) -> Result<f32, String> {
-    let value: f32 = text
-        .parse()
-        .map_err(|_| format!("cannot read '{text}' as a number"))?;
-    if (0.0..=180.0).contains(&value) {
-        Ok(value)
-    } else {
-        Err(format!(
-            "must be an angle from 0 to 180 degrees, got {value}"
-        ))
-    }
+    number(
+        text,
+        |v| (0.0..=180.0).contains(&v),
+        "an angle from 0 to 180 degrees",
+    )
 }
 
 /// Exits with `message`, the usage and status 2, as for any other bad argument.
