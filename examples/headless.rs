@@ -21,8 +21,8 @@
 use bevy::prelude::*;
 use bevy::time::TimeUpdateStrategy;
 use bevy_sph2d::fluid::{
-    DfsphSettings, PressureSolver, STANDARD_GRAVITY, SphParams, SphSolver, Tank,
-    refresh_fluid_state,
+    DfsphSettings, FluidMaterial, Liquid, PressureSolver, STANDARD_GRAVITY, SphParams, SphSolver,
+    Tank, refresh_fluid_state,
 };
 use bevy_sph2d::gameplay::FluidBlock;
 use bevy_sph2d::gravity::GravityAcceleration;
@@ -58,7 +58,7 @@ struct Cli {
     /// Tank inner height, m.
     #[arg(long, default_value_t = 0.4, value_parser = positive)]
     tank_height: f32,
-    /// Tank scenario: water depth, m.
+    /// Tank, float and lock-exchange scenarios: the liquid's depth, m.
     #[arg(long, default_value_t = 0.2, value_parser = positive)]
     depth: f32,
     /// Particle spacing, m [default: column width / 40, or depth / 40].
@@ -104,6 +104,9 @@ struct Cli {
     /// under 90 it wets, over 90 it beads; acts with --surface-tension).
     #[arg(long, default_value_t = 90.0, value_parser = angle)]
     contact_angle: f32,
+    /// Lock exchange: the right half's liquid's rest density over the base liquid's (0.25–4).
+    #[arg(long, default_value_t = 2.0, value_parser = positive)]
+    density_ratio: f32,
     /// Compute threads [default: all cores].
     #[arg(long)]
     threads: Option<usize>,
@@ -197,6 +200,11 @@ enum Scenario {
     /// A round drop `--column-width` across resting on the middle of the tank's floor,
     /// released (with --surface-tension and --contact-angle, it spreads or beads to the angle).
     Sessile,
+    /// The tank's left half filled to `--depth` with the base liquid (water), its right half
+    /// with a liquid `--density-ratio` times as dense, released: each runs under or over the
+    /// other as a gravity current. The CSV gains a last column, `material` (0 the base
+    /// liquid, 1 the other).
+    LockExchange,
 }
 
 /// The fluid's pressure solver.
@@ -273,6 +281,8 @@ struct Config {
     block: FluidBlock,
     /// Only the disc inscribed in the block (sessile).
     round: bool,
+    /// The block's right half is the second liquid (lock exchange).
+    two_liquids: bool,
     #[cfg_attr(
         not(feature = "avian"),
         expect(dead_code, reason = "the float scenario is built with avian")
@@ -319,7 +329,7 @@ fn configure(cli: &Cli) -> Result<Config, String> {
             (FluidBlock::new(corner, Vec2::splat(d)), d, d / 20.0)
         }
         Scenario::Galaxy => return Err("the galaxy scenario has no fluid".into()),
-        Scenario::Tank | Scenario::Float => {
+        Scenario::Tank | Scenario::Float | Scenario::LockExchange => {
             let depth = cli.depth;
             if depth > tank.height {
                 return Err(format!(
@@ -354,6 +364,14 @@ fn configure(cli: &Cli) -> Result<Config, String> {
         gravity: Vec2::new(0.0, -cli.gravity),
         tank: Some(tank),
         max_substeps: 100_000,
+        liquids: if cli.scenario == Scenario::LockExchange {
+            vec![Liquid::new(
+                "dense",
+                cli.density_ratio * SphParams::water().rest_density,
+            )]
+        } else {
+            Vec::new()
+        },
         ..default()
     };
     let mut params = params;
@@ -389,6 +407,7 @@ fn configure(cli: &Cli) -> Result<Config, String> {
         body,
         block: block.with_jitter(cli.jitter).with_seed(cli.seed),
         round: cli.scenario == Scenario::Sessile,
+        two_liquids: cli.scenario == Scenario::LockExchange,
         duration: cli.duration,
         every: cli.every,
         out: cli.out.clone(),
@@ -436,8 +455,20 @@ fn main() {
     }
 }
 
-/// The scenario's fluid particles: the block's, or the disc inscribed in it.
+/// The scenario's fluid particles: the block's, the disc inscribed in it, or the block with
+/// its right half the second liquid.
 fn spawn_fluid(config: &Config, world: &mut World) -> Vec<Entity> {
+    if config.two_liquids {
+        let block = &config.block;
+        let middle = block.min.x + block.size.x / 2.0;
+        let positions = block.positions_for(&config.params);
+        return world
+            .spawn_batch(positions.into_iter().map(move |p| {
+                let material = FluidMaterial(u8::from(p.x > middle));
+                (FluidParticle, Position(p), material)
+            }))
+            .collect();
+    }
     if !config.round {
         return config.block.spawn(world);
     }
@@ -478,8 +509,12 @@ fn record(config: &Config) -> std::io::Result<()> {
         None => None,
     };
     let mut out = BufWriter::new(std::fs::File::create(&config.out)?);
-    writeln!(out, "time,id,x,y,vx,vy,ax,ay,mass,density,pressure")?;
-    let mass = config.params.particle_mass();
+    let material_column = if config.two_liquids { ",material" } else { "" };
+    writeln!(
+        out,
+        "time,id,x,y,vx,vy,ax,ay,mass,density,pressure{material_column}"
+    )?;
+    let base_mass = config.params.particle_mass();
     let frames = (config.duration / config.every + 1e-9).floor() as u64;
     let started = std::time::Instant::now();
     let bar = progress(frames + 1, "frames");
@@ -496,16 +531,25 @@ fn record(config: &Config) -> std::io::Result<()> {
         if let (Some(entity), Some(file)) = (body, bodies_out.as_mut()) {
             float::row(world, entity, time, file)?;
         }
-        let mut query = world.query::<(&Position, &Velocity, &Acceleration, &Density, &Pressure)>();
+        let mut query = world.query::<(
+            (&Position, &Velocity, &Acceleration, &Density, &Pressure),
+            Option<&FluidMaterial>,
+        )>();
         for (id, &entity) in ids.iter().enumerate() {
-            let Ok((x, v, a, rho, p)) = query.get(world, entity) else {
+            let Ok(((x, v, a, rho, p), material)) = query.get(world, entity) else {
                 continue;
             };
-            writeln!(
+            let material = material.copied().unwrap_or_default();
+            let mass = base_mass * config.params.density_ratio(material);
+            write!(
                 out,
                 "{time:.6},{id},{},{},{},{},{},{},{mass},{},{}",
                 x.x, x.y, v.x, v.y, a.x, a.y, rho.0, p.0
             )?;
+            if config.two_liquids {
+                write!(out, ",{}", material.0)?;
+            }
+            writeln!(out)?;
         }
     }
     out.flush()?;

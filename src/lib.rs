@@ -215,9 +215,9 @@ pub mod prelude {
     #[cfg(feature = "avian")]
     pub use crate::coupling::{FluidCoupled, FluidCouplingPlugin};
     pub use crate::fluid::{
-        Acceleration, ContactAngle, Density, FluidForce, FluidParticle, KernelKind, Pressure,
-        Solid, SolidEntered, SolidLeft, SolidShape, SolidVelocity, SphParams, SphParamsStatus,
-        SphPlugin, SphStats, SphSystems, Submerged, Tank,
+        Acceleration, ContactAngle, Density, FluidForce, FluidMaterial, FluidParticle, KernelKind,
+        Liquid, Pressure, Solid, SolidEntered, SolidLeft, SolidShape, SolidVelocity, SphParams,
+        SphParamsStatus, SphPlugin, SphStats, SphSystems, Submerged, Tank,
     };
     pub use crate::gameplay::{
         EmitterRate, FluidBlock, FluidDrain, FluidEmitter, FluidEntered, FluidLeft, FluidQuery,

@@ -14,6 +14,7 @@
 use super::components::{
     Acceleration, Density, FluidIndex, FluidParticle, Position, Pressure, Stiffness, Velocity,
 };
+use super::liquids::FluidMaterial;
 use super::resources::{SphSolver, SphStats};
 use crate::schedule::{SphSubstep, SphSubstepSystems};
 use crate::sim::parallel::{PARALLEL_SLOTS, Parallel, Rayon, Sequential};
@@ -32,6 +33,8 @@ pub(crate) struct FluidData {
     density: &'static mut Density,
     pressure: &'static mut Pressure,
     stiffness: &'static mut Stiffness,
+    /// Which liquid (read only: the solver takes its rest density ratio).
+    material: Option<&'static FluidMaterial>,
 }
 
 /// The fluid's state components, with the particle's gathered index.
@@ -73,8 +76,11 @@ impl SphSolver {
     ) {
         self.generation = self.generation.wrapping_add(1).max(1);
         self.particles.resize(items.len());
+        self.particles.rest_ratio.clear();
         for (i, item) in items.enumerate() {
             item.put(&mut self.particles, i);
+            let ratio = density_ratio(&self.density_ratios, item.material);
+            note_ratio(&mut self.particles.rest_ratio, i, ratio);
         }
     }
 }
@@ -238,10 +244,13 @@ fn neighbors_stage(
     // What the stages read before they write it: the accelerations, densities and pressures
     // are theirs, and the stages below write every one of them back.
     let p = &mut solver.particles;
+    p.rest_ratio.clear();
     for (i, (slot, data)) in fluid.iter().enumerate() {
         p.position[i] = data.position.0;
         p.velocity[i] = data.velocity.0;
         p.stiffness[i] = data.stiffness.0;
+        let ratio = density_ratio(&solver.density_ratios, data.material);
+        note_ratio(&mut p.rest_ratio, i, ratio);
         same &= slot.index as usize == i && slot.generation == generation;
     }
     if !same {
@@ -255,6 +264,27 @@ fn neighbors_stage(
         }
     }
     solver.run_stage(Stage::Neighbors);
+}
+
+/// The rest density ratio of `material` (the base liquid's without one) from `ratios`, by
+/// material.
+fn density_ratio(ratios: &[f32], material: Option<&FluidMaterial>) -> f32 {
+    material
+        .and_then(|m| ratios.get(m.0 as usize))
+        .copied()
+        .unwrap_or(1.0)
+}
+
+/// Notes particle `i`'s rest density `ratio` in `ratios` (see
+/// [`Particles::rest_ratio`]), which stays empty while every particle so far is the base
+/// liquid.
+fn note_ratio(ratios: &mut Vec<f32>, i: usize, ratio: f32) {
+    if ratios.is_empty() && ratio != 1.0 {
+        ratios.resize(i, 1.0);
+    }
+    if !ratios.is_empty() {
+        ratios.push(ratio);
+    }
 }
 
 /// [`SphSubstepSystems::Density`].

@@ -2,6 +2,7 @@
 
 mod components;
 mod driver;
+mod liquids;
 mod params;
 mod prepare;
 mod resources;
@@ -26,6 +27,7 @@ pub use components::{Acceleration, Density, FluidParticle, Position, Pressure, V
 pub(crate) use components::{FluidIndex, Stiffness};
 pub(crate) use driver::SubstepHooks;
 pub use driver::refresh_fluid_state;
+pub use liquids::{FluidMaterial, Liquid, MAX_DENSITY_RATIO};
 pub use params::STANDARD_GRAVITY;
 pub use params::{SphParams, SphParamsError};
 pub use resources::{SphParamsStatus, SphSolver, SphStats};
@@ -139,6 +141,7 @@ impl Plugin for SphPlugin {
         app.register_type::<SphParams>()
             .register_type::<SphStats>()
             .register_type::<FluidParticle>()
+            .register_type::<FluidMaterial>()
             .register_type::<Position>()
             .register_type::<Velocity>()
             .register_type::<Acceleration>()

@@ -81,6 +81,10 @@ pub struct SphParams {
     /// into a film), over 90 it beads; 90, the default, is neutral. It acts only with
     /// [`surface_tension`](Self::surface_tension): the surface meets a wall at this angle.
     pub contact_angle: f32,
+    /// The liquids besides the base one (whose rest density is
+    /// [`rest_density`](Self::rest_density)): a particle with
+    /// [`FluidMaterial(k)`](crate::fluid::FluidMaterial) is `liquids[k − 1]`. Empty by default.
+    pub liquids: Vec<crate::fluid::Liquid>,
 }
 
 impl Default for SphParams {
@@ -224,6 +228,7 @@ impl SphParams {
             dfsph: DfsphSettings::default(),
             surface_tension: 0.0,
             contact_angle: 90.0,
+            liquids: Vec::new(),
         }
     }
 
@@ -402,6 +407,7 @@ impl SphParams {
             "m",
         )?;
         self.check_tank()?;
+        self.check_liquids()?;
         let mass = self.particle_mass();
         if !(mass.is_finite() && mass > 0.0) {
             return Err(SphParamsError {

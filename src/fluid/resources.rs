@@ -26,6 +26,9 @@ pub struct SphSolver {
     pub(crate) removed_escaped: u64,
     /// The solids' entities, in the order of the step's solids.
     pub(crate) solids: super::solids::SolidIndex,
+    /// Each [`FluidMaterial`](super::FluidMaterial)'s rest density over the base liquid's, by
+    /// material (the base liquid's one first).
+    pub(crate) density_ratios: Vec<f32>,
 }
 
 impl Default for SphSolver {
@@ -48,6 +51,7 @@ impl SphSolver {
             removed_non_finite: 0,
             solids: Default::default(),
             removed_escaped: 0,
+            density_ratios: vec![1.0],
         }
     }
 
@@ -129,6 +133,12 @@ impl crate::params::Params for SphParams {
             || old.support != constants.support
             || old.wall_layers != constants.wall_layers;
         solver.step.set_constants(constants);
+        solver.density_ratios.clear();
+        solver.density_ratios.push(1.0);
+        let liquids = self.liquids.iter();
+        solver
+            .density_ratios
+            .extend(liquids.map(|liquid| liquid.rest_density / self.rest_density));
         if geometry_changed {
             solver.walls_dirty = true;
         }

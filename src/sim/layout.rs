@@ -228,6 +228,9 @@ pub(crate) struct FluidSnapshot {
     pub pressure: PressureSlots,
     /// Largest speed in the snapshot, m/s.
     pub max_speed: f32,
+    /// Rest density over [`SphConstants::rest_density`] per sorted slot (a particle's mass over
+    /// the base liquid's), padded with ones like `kinematics`.
+    pub rest_ratio: Vec<f32>,
 }
 
 impl FluidSnapshot {
@@ -237,8 +240,7 @@ impl FluidSnapshot {
     pub fn rebuild(
         &mut self,
         c: &SphConstants,
-        positions: &[Vec2],
-        velocities: &[Vec2],
+        (positions, velocities, ratios): (&[Vec2], &[Vec2], &[f32]),
         parallel: &impl Parallel,
     ) {
         debug_assert_eq!(positions.len(), velocities.len());
@@ -288,6 +290,13 @@ impl FluidSnapshot {
         self.kinematics[n..].fill(far);
         for padding in &self.pressure.0.0[n..] {
             padding.store(at_rest, Ordering::Relaxed);
+        }
+        self.rest_ratio.clear();
+        if ratios.is_empty() {
+            self.rest_ratio.resize(n + LANES, 1.0);
+        } else {
+            let sorted = order.iter().map(|&i| ratios[i as usize]);
+            self.rest_ratio.extend(sorted.chain([1.0; LANES]));
         }
     }
 

@@ -44,6 +44,10 @@ pub struct Particles {
     pub pressure: Vec<f32>,
     /// DFSPH stiffness `[κ, κᵛ]`, m²/s², carried to the next sub-step.
     pub stiffness: Vec<Vec2>,
+    /// Each particle's rest density over [`SphConstants::rest_density`] (its liquid's, 1 for
+    /// the base liquid); empty when every particle is the base liquid. When not empty it is as
+    /// long as the other arrays.
+    pub rest_ratio: Vec<f32>,
 }
 
 impl Particles {
@@ -57,7 +61,14 @@ impl Particles {
             density: vec![rest_density; n],
             pressure: vec![0.0; n],
             stiffness: vec![Vec2::ZERO; n],
+            rest_ratio: Vec::new(),
         }
+    }
+
+    /// The rest density ratio of particle `i` (see [`rest_ratio`](Self::rest_ratio)).
+    #[inline]
+    pub fn ratio(&self, i: usize) -> f32 {
+        self.rest_ratio.get(i).copied().unwrap_or(1.0)
     }
 
     /// Number of particles.
@@ -78,6 +89,7 @@ impl Particles {
         self.density.clear();
         self.pressure.clear();
         self.stiffness.clear();
+        self.rest_ratio.clear();
     }
 
     /// Sets the number of particles to `n`, keeping the first ones; new ones at rest at the
@@ -89,6 +101,9 @@ impl Particles {
         self.density.resize(n, 0.0);
         self.pressure.resize(n, 0.0);
         self.stiffness.resize(n, Vec2::ZERO);
+        if !self.rest_ratio.is_empty() {
+            self.rest_ratio.resize(n, 1.0);
+        }
     }
 
     /// Appends one particle.
@@ -99,6 +114,9 @@ impl Particles {
         self.density.push(rest_density);
         self.pressure.push(0.0);
         self.stiffness.push(stiffness);
+        if !self.rest_ratio.is_empty() {
+            self.rest_ratio.push(1.0);
+        }
     }
 }
 
@@ -517,8 +535,15 @@ impl FluidStep {
                 let s = &mut step.shared;
                 let c = s.constants;
                 s.walls.place(&c);
-                s.snapshot
-                    .rebuild(&c, &particles.position, &particles.velocity, parallel);
+                s.snapshot.rebuild(
+                    &c,
+                    (
+                        &particles.position,
+                        &particles.velocity,
+                        &particles.rest_ratio,
+                    ),
+                    parallel,
+                );
             }),
             Stage::Density => {
                 self.timed(SubstepPart::Density, |step| {

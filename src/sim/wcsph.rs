@@ -48,8 +48,10 @@ impl PressureStages for Wcsph {
             let fixed = &*walls;
             for_each_slot(lists, parallel, |slot, list| {
                 let x = snapshot.points.get(slot);
-                let rho = density_and_neighbors_at(&w, &c, x, snapshot, fixed, list);
-                snapshot.set_pressure(slot, rho, pressure_from_density(&c, rho));
+                // The number density times the particle's own mass (Solenthaler & Pajarola).
+                let ratio = snapshot.rest_ratio[slot];
+                let rho = ratio * density_and_neighbors_at(&w, &c, x, snapshot, fixed, list);
+                snapshot.set_pressure(slot, rho, liquid_pressure(&c, rho, ratio));
                 0.0
             });
             walls.update_pressure(|states, points| {
@@ -72,7 +74,7 @@ impl PressureStages for Wcsph {
             for_each_slot(&mut s.accelerations, parallel, |slot, a| {
                 let [x, y, vx, vy] = snapshot.kinematics[slot];
                 let rho = snapshot.pressure.get(slot).0;
-                let p = pressure_from_density(&c, rho);
+                let p = liquid_pressure(&c, rho, snapshot.rest_ratio[slot]);
                 let (x, v) = (Vec2::new(x, y), Vec2::new(vx, vy));
                 *a = acceleration_at(&g, &c, x, v, rho, p, &lists[slot], snapshot, walls);
                 0.0
@@ -83,7 +85,7 @@ impl PressureStages for Wcsph {
             let slot = slot_of[i] as usize;
             *particle.acceleration = accelerations[slot];
             *particle.density = snapshot.pressure.get(slot).0;
-            *particle.pressure = pressure_from_density(&c, *particle.density);
+            *particle.pressure = liquid_pressure(&c, *particle.density, snapshot.rest_ratio[slot]);
             0
         });
     }
@@ -128,7 +130,7 @@ impl PressureStages for Wcsph {
                 let viscous = laminar * r2 / ((r2 + eta_sq) * (rho_i + d.density[wall]));
                 let slope = g.push_slope(r2.sqrt());
                 let pair = slope * (viscous * v - (term_i + d.pressure_term[wall]) * r);
-                let force = -c.mass * c.mass * pair;
+                let force = -c.mass * c.mass * snapshot.rest_ratio[i] * pair;
                 sums[k].0 += force;
                 sums[k].1 += (x - centers[k]).perp_dot(force);
             });
@@ -153,6 +155,13 @@ pub fn pressure_from_density(c: &SphConstants, density: f32) -> f32 {
         ratio.powf(c.eos_exponent)
     };
     (c.stiffness * (powered - 1.0) + c.background_pressure).max(0.0)
+}
+
+/// [`pressure_from_density`] for a liquid `ratio` times as dense as the base one: its own Tait
+/// law, `ρ₀ᵢ = ratio ρ₀` and a stiffness `ratio` times the base liquid's (`ρ₀ᵢ c₀²/γ`).
+#[inline]
+pub fn liquid_pressure(c: &SphConstants, density: f32, ratio: f32) -> f32 {
+    ratio * pressure_from_density(c, density / ratio)
 }
 
 /// Inverse of [`pressure_from_density`] for non-negative pressure, kg/m³.
@@ -231,12 +240,14 @@ pub fn acceleration_at<K: RadialKernel>(
                 let lanes = [0, 1, 2, 3].map(|lane| batch[lane] as usize);
                 let ([px, py], neighbor) = fluid.gather(lanes);
                 let (dx, dy) = (px - Vec4::splat(x.x), py - Vec4::splat(x.y));
-                pair.accumulate(kernel, dx, dy, neighbor, &mut sum);
+                let mass = Vec4::from_array(lanes.map(|j| fluid.rest_ratio[j]));
+                pair.accumulate(kernel, (dx, dy, mass), neighbor, &mut sum);
             }
         }
         None => fluid.points.for_each_batch(x, |start, dx, dy, _| {
             let (_, neighbor) = fluid.gather([start, start + 1, start + 2, start + 3]);
-            pair.accumulate(kernel, dx, dy, neighbor, &mut sum);
+            let mass = Vec4::from_slice(&fluid.rest_ratio[start..start + LANES]);
+            pair.accumulate(kernel, (dx, dy, mass), neighbor, &mut sum);
         }),
     }
     // Artificial viscosity is a numerical damping of the fluid's own noise; against a wall it
@@ -247,7 +258,8 @@ pub fn acceleration_at<K: RadialKernel>(
         ..pair
     };
     walls.points.for_each_batch(x, |start, dx, dy, _| {
-        wall_pair.accumulate(kernel, dx, dy, walls.data.lanes(start), &mut sum);
+        let lanes = walls.data.lanes(start);
+        wall_pair.accumulate(kernel, (dx, dy, Vec4::ONE), lanes, &mut sum);
     });
     c.mass * Vec2::new(sum.0.element_sum(), sum.1.element_sum()) + c.gravity
 }
@@ -286,14 +298,13 @@ impl PairTerms {
     }
 
     /// Adds, per lane, the pressure and viscosity terms (per unit mass) of four neighbours at
-    /// offsets `(dx, dy)` with `[vx, vy, density, pressure term]`; lanes outside the support
-    /// (or at the particle itself) add nothing.
+    /// offsets `(dx, dy)` with `[vx, vy, density, pressure term]` and masses `mass` (over the
+    /// base liquid's); lanes outside the support (or at the particle itself) add nothing.
     #[inline(always)]
     fn accumulate<K: RadialKernel>(
         &self,
         kernel: &K,
-        dx: Vec4,
-        dy: Vec4,
+        (dx, dy, mass): (Vec4, Vec4, Vec4),
         [vx_j, vy_j, rho_j, term_j]: [Vec4; 4],
         sum: &mut (Vec4, Vec4),
     ) {
@@ -307,6 +318,7 @@ impl PairTerms {
         let approach = (vx * rx + vy * ry).min(Vec4::ZERO);
         let scalar = self.own_term + term_j - self.artificial * approach * inv;
         let viscous = self.laminar * r2 * inv;
+        let slope = slope * mass;
         let fx = slope * (viscous * vx - scalar * rx);
         let fy = slope * (viscous * vy - scalar * ry);
         sum.0 += Vec4::select(inside, fx, Vec4::ZERO);

@@ -10,6 +10,7 @@ mod determinism;
 mod ecs_matches_slices;
 mod gravity;
 mod headless_cli;
+mod liquids;
 mod params;
 mod physics;
 mod save_restore;

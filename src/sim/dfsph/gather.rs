@@ -141,11 +141,16 @@ impl Dfsph {
                     let density = c.volume * sums.density.element_sum();
                     let mirrored = wall_weight(density);
                     let wall_gradient = mirrored * wall.gradient;
-                    let diagonal = (sums.gradient + WALL_MIRROR * wall_gradient).length_squared()
-                        + sums.gradient_sq;
+                    // With masses the diagonal is `|…|²/rᵢ + Σⱼ |gᵢⱼ|²/rⱼ`; `1/rᵢ` for both (exact
+                    // within one liquid) keeps it a preconditioner's guess at the interface.
+                    let inverse_mass = 1.0 / fluid.rest_ratio[slot];
+                    let diagonal = inverse_mass
+                        * ((sums.gradient + WALL_MIRROR * wall_gradient).length_squared()
+                            + sums.gradient_sq);
                     *state = SlotState {
                         count: len.min(stride) as u32,
                         density,
+                        inverse_mass,
                         factor: if diagonal > pinned_below {
                             1.0 / diagonal
                         } else {

@@ -56,6 +56,8 @@ pub(super) struct GridStart {
     grid: GridPressure,
     /// The particles' positions by sorted slot.
     positions: Vec<Vec2>,
+    /// Their rest density ratios by sorted slot, with two liquids (empty with one).
+    ratios: Vec<f32>,
 }
 
 impl GridStart {
@@ -63,18 +65,28 @@ impl GridStart {
     /// alone, before their velocities are known: [`GridPressure::prepare`], on the calling
     /// thread. Runs beside the neighbour pass ([`Dfsph::prepare_with_grid`]).
     pub(super) fn prepare(&mut self, c: &SphConstants, (fluid, walls): (&FluidSnapshot, &Walls)) {
-        let Self { grid, positions } = self;
+        let Self {
+            grid,
+            positions,
+            ratios,
+        } = self;
         positions.clear();
         positions.extend((0..fluid.len()).map(|slot| fluid.points.get(slot)));
-        let input = grid_input(c, positions);
+        ratios.clear();
+        let sorted = &fluid.rest_ratio[..fluid.len()];
+        if sorted.iter().any(|&r| r != 1.0) {
+            ratios.extend_from_slice(sorted);
+        }
+        let input = grid_input(c, positions, ratios);
         grid.prepare(&input, |x| solid_velocity(walls, x), &Sequential);
     }
 }
 
 /// What the grid reads of the particles at `positions` under the constants `c`.
-fn grid_input<'a>(c: &SphConstants, positions: &'a [Vec2]) -> GridInput<'a> {
+fn grid_input<'a>(c: &SphConstants, positions: &'a [Vec2], ratios: &'a [f32]) -> GridInput<'a> {
     GridInput {
         positions,
+        ratios,
         spacing: c.spacing,
         rest_density: c.rest_density,
         gravity: c.gravity,
@@ -87,6 +99,7 @@ impl Default for GridStart {
         Self {
             grid: GridPressure::new(SETTINGS),
             positions: Vec::new(),
+            ratios: Vec::new(),
         }
     }
 }
@@ -139,7 +152,11 @@ impl Dfsph {
         (dt, first_of_tick): (f32, bool),
         parallel: &impl Parallel,
     ) -> GridReport {
-        let GridStart { grid, positions } = &mut self.grid_start;
+        let GridStart {
+            grid,
+            positions,
+            ratios,
+        } = &mut self.grid_start;
         if first_of_tick {
             grid.forget();
         }
@@ -151,7 +168,7 @@ impl Dfsph {
             );
             return GridReport::default();
         }
-        let input = grid_input(c, positions);
+        let input = grid_input(c, positions, ratios);
         let report = grid.solve(&input, &self.velocity, dt, parallel);
         let (grid, positions) = (&*grid, &*positions);
         let to_stiffness = 1.0 / c.rest_density;

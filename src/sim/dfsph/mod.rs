@@ -152,8 +152,13 @@ const MIRRORED_FROM: f32 = 1.5;
 struct SlotState {
     /// Cached fluid neighbours.
     count: u32,
-    /// `ρ/ρ₀` by summation over fluid and wall particles.
+    /// `ρ/ρ₀` by summation over fluid and wall particles, `ρ₀` its own liquid's: `V Σ W`, the
+    /// number density of Solenthaler & Pajarola (2008), which holds at one across the surface
+    /// between two liquids.
     density: f32,
+    /// One over the particle's rest density ratio (`Particles::rest_ratio`): the pressure
+    /// moves a particle of a lighter liquid the more.
+    inverse_mass: f32,
     /// The DFSPH factor `1/(|Σⱼ gᵢⱼ + 2 g_wall|² + Σⱼ |gᵢⱼ|²)`, m² (zero without neighbours or
     /// when pinned, [`PINNED_DIAGONAL`]): the inverse of the diagonal of the pressure equations,
     /// per `dt²`.
@@ -374,7 +379,8 @@ impl Dfsph {
     ) -> Vec2 {
         let s = self.state[slot];
         let (xi, vi) = (fluid.points.get(slot), self.velocity[slot]);
-        let rho_i = s.density * c.rest_density;
+        let ratios = &fluid.rest_ratio;
+        let rho_i = s.density * c.rest_density * ratios[slot];
         let h = c.smoothing_length;
         let eta_sq = Vec4::splat(0.01 * h * h);
         // m ∇W = ρ₀ g / s.
@@ -390,7 +396,10 @@ impl Dfsph {
             let ry = Vec4::splat(xi.y) - lanes(slots, |j| fluid.points.y[j]);
             let vx = Vec4::splat(vi.x) - lanes(slots, |j| self.velocity[j].x);
             let vy = Vec4::splat(vi.y) - lanes(slots, |j| self.velocity[j].y);
+            // mⱼ = rⱼ ρ₀ V: the pair's terms are symmetric in mᵢ mⱼ, so momentum is kept.
+            let mass_j = lanes(slots, |j| ratios[j]);
             let gx = to_mass_gradient
+                * mass_j
                 * Vec4::new(
                     gradients[0].x,
                     gradients[1].x,
@@ -398,6 +407,7 @@ impl Dfsph {
                     gradients[3].x,
                 );
             let gy = to_mass_gradient
+                * mass_j
                 * Vec4::new(
                     gradients[0].y,
                     gradients[1].y,
@@ -405,7 +415,7 @@ impl Dfsph {
                     gradients[3].y,
                 );
             let r2 = rx * rx + ry * ry;
-            let rho_j = lanes(slots, |j| self.state[j].density) * rest;
+            let rho_j = lanes(slots, |j| self.state[j].density) * rest * mass_j;
             let inv = Vec4::ONE / ((r2 + eta_sq) * (rho_i4 + rho_j));
             let approach = (vx * rx + vy * ry).min(Vec4::ZERO);
             let viscous = laminar * inv * (rx * gx + ry * gy);
@@ -431,7 +441,8 @@ impl Dfsph {
     /// force limit `¼√(h/a)`, the viscous limit `⅛h²/ν` for the laminar viscosity plus the
     /// artificial one (`ν ≈ α c₀ h / 8` in 2D), and the settings' longest step.
     pub fn stable_time_step(&self, c: &SphConstants, max_acceleration: f32) -> f32 {
-        let largest_stiffness = self.kappa.iter().fold(0.0f32, |a, &k| a.max(k));
+        let largest_stiffness = (self.kappa.iter().zip(&self.state))
+            .fold(0.0f32, |a, (&k, s)| a.max(k * s.inverse_mass));
         let speed = max_length(&self.velocity).max(pressure_speed(largest_stiffness));
         stable_time_step(c, speed, max_acceleration)
     }
@@ -445,7 +456,8 @@ impl Dfsph {
     /// Summed density at sorted `slot`, kg/m³.
     #[inline]
     pub fn density(&self, c: &SphConstants, slot: usize) -> f32 {
-        self.state[slot].density * c.rest_density
+        let s = &self.state[slot];
+        s.density * c.rest_density / s.inverse_mass
     }
 
     /// Stiffness `[κ, κᵛ]` at sorted `slot` (m²/s²), to warm-start the next sub-step.
@@ -585,12 +597,15 @@ fn lanes(slots: &[u32], value: impl Fn(usize) -> f32) -> Vec4 {
     )
 }
 
-/// `Σⱼ (xᵢ + xⱼ) gᵢⱼ + 2 xᵢ g_wall,ᵢ`: the pressure acceleration of stiffness `x` on particle
-/// `slot`, per unit stiffness (walls mirror the particle's own stiffness, [`WALL_MIRROR`]).
+/// `(Σⱼ (xᵢ + xⱼ) gᵢⱼ + 2 xᵢ g_wall,ᵢ) / rᵢ`: the pressure acceleration of stiffness `x` on
+/// particle `slot`, per unit stiffness (walls mirror the particle's own stiffness,
+/// [`WALL_MIRROR`]; `rᵢ` its rest density ratio: the force is the pressure's, the particle's
+/// mass its liquid's).
 #[inline(always)]
 fn pressure_push(rows: &Rows, simd: Simd, s: &SlotState, slot: usize, x: &[f32]) -> Vec2 {
     let own = x[slot];
-    WALL_MIRROR * own * s.wall_gradient + rows.row(slot, s.count).push(simd, x, own)
+    s.inverse_mass
+        * (WALL_MIRROR * own * s.wall_gradient + rows.row(slot, s.count).push(simd, x, own))
 }
 
 #[cfg(test)]
@@ -612,7 +627,11 @@ mod tests {
             .map(|k| Vec2::new((k % n) as f32 + 0.5, (k / n) as f32 + 0.5) * dx)
             .collect();
         let mut fluid = FluidSnapshot::default();
-        fluid.rebuild(&c, &points, &vec![Vec2::ZERO; points.len()], &Sequential);
+        fluid.rebuild(
+            &c,
+            (&points, &vec![Vec2::ZERO; points.len()], &[]),
+            &Sequential,
+        );
         let mut dfsph = Dfsph::default();
         let walls = Walls::default();
         let order = fluid.grid().order().to_vec();
@@ -644,7 +663,11 @@ mod tests {
             .map(|k| Vec2::new((k % nx) as f32 + 0.5, (k / nx) as f32 + 0.5) * dx)
             .collect();
         let mut fluid = FluidSnapshot::default();
-        fluid.rebuild(&c, &points, &vec![Vec2::ZERO; points.len()], &Sequential);
+        fluid.rebuild(
+            &c,
+            (&points, &vec![Vec2::ZERO; points.len()], &[]),
+            &Sequential,
+        );
         let mut walls = Walls::default();
         walls.rebuild(&c);
         let mut dfsph = Dfsph::default();

@@ -51,7 +51,7 @@ impl Dfsph {
         let laminar = 4.0 * c.kinematic_viscosity;
         Self::for_each_solid_pair(c, fluid, walls, |k, x, wall, i, pair| {
             let s = &self.state[i];
-            let rho_i = s.density * c.rest_density;
+            let rho_i = s.density * c.rest_density / s.inverse_mass;
             let coefficient = laminar * c.rest_density / (rho_i + c.rest_density);
             let v_b = Vec2::new(walls.data.vx[wall], walls.data.vy[wall]);
             let mut a = coefficient * pair.friction * (self.velocity[i] - v_b);

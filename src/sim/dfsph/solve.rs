@@ -248,8 +248,8 @@ struct Solve<'a, P: Parallel> {
 }
 
 impl<P: Parallel> Solve<'_, P> {
-    /// The push `u = Dᵀp` of the current direction into [`Self::push`]; returns `pᵀ(dt²A)p =
-    /// dt² Σ|u|²`.
+    /// The push `u = R⁻¹Dᵀp` of the current direction into [`Self::push`] (`R` the particles'
+    /// rest density ratios); returns `pᵀ(dt²A)p = dt² Σ rᵢ|uᵢ|²`.
     fn push_direction(&mut self) -> f64 {
         let (rows, state, simd, direction) = (self.rows, self.state, self.simd, &*self.direction);
         let sum = fold_slots(
@@ -257,7 +257,7 @@ impl<P: Parallel> Solve<'_, P> {
             self.parallel,
             |slot, u| {
                 *u = pressure_push(rows, simd, &state[slot], slot, direction);
-                u.length_squared() as f64
+                u.length_squared() as f64 / state[slot].inverse_mass as f64
             },
             |a, b| a + b,
         );

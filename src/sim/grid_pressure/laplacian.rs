@@ -44,6 +44,12 @@ pub(crate) struct Laplacian {
     pub stencil: Vec<[u32; 4]>,
     /// Each unknown's diagonal.
     pub unknown_diag: Vec<f32>,
+    /// Each cell's rest density ratio (two liquids); empty for one liquid, where every face
+    /// couples by `off`.
+    pub ratio: Vec<f32>,
+    /// With [`ratio`](Self::ratio): each unknown's couplings to its four neighbours,
+    /// `off · 2/(r_c + r_n)` (the harmonic mean of `1/r` across the face, symmetric), 1/m².
+    pub coupling: Vec<[f32; 4]>,
 }
 
 impl Laplacian {
@@ -147,14 +153,41 @@ impl Laplacian {
     #[inline]
     pub fn apply_f64(&self, k: usize, x: &[f64]) -> f64 {
         let [l, r, d, u] = self.stencil[k].map(|n| x[n as usize]);
-        f64::from(self.unknown_diag[k]) * x[k] - f64::from(self.off) * ((l + r) + (d + u))
+        let own = f64::from(self.unknown_diag[k]) * x[k];
+        match self.coupling.get(k) {
+            None => own - f64::from(self.off) * ((l + r) + (d + u)),
+            Some(&[a, b, c, e]) => {
+                let [a, b, c, e] = [a, b, c, e].map(f64::from);
+                own - ((a * l + b * r) + (c * d + e * u))
+            }
+        }
     }
 
     /// `(A x)_k` of unknown `k` in f32, `x` over the unknowns with its zero slot.
     #[inline]
     pub fn apply_f32(&self, k: usize, x: &[f32]) -> f32 {
         let [l, r, d, u] = self.stencil[k].map(|n| x[n as usize]);
-        self.unknown_diag[k] * x[k] - self.off * ((l + r) + (d + u))
+        let own = self.unknown_diag[k] * x[k];
+        match self.coupling.get(k) {
+            None => own - self.off * ((l + r) + (d + u)),
+            Some(&[a, b, c, e]) => own - ((a * l + b * r) + (c * d + e * u)),
+        }
+    }
+
+    /// The rest density ratio of cell `c`: one for a single liquid.
+    #[inline]
+    pub fn ratio_of(&self, c: usize) -> f32 {
+        self.ratio.get(c).copied().unwrap_or(1.0)
+    }
+
+    /// The coupling across the face between fluid cells `c` and `n`, per `off`: `2/(r_c + r_n)`.
+    #[inline]
+    pub fn face(&self, c: usize, n: usize) -> f32 {
+        if self.ratio.is_empty() {
+            1.0
+        } else {
+            2.0 / (self.ratio[c] + self.ratio[n])
+        }
     }
 
     /// Numbers the unknowns and gathers their stencils and diagonals (call it once the kinds
@@ -185,6 +218,19 @@ impl Laplacian {
         let diag = &self.diag;
         self.unknown_diag
             .extend(self.cells.iter().map(|&c| diag[c as usize]));
+        let mut coupling = core::mem::take(&mut self.coupling);
+        coupling.clear();
+        if !self.ratio.is_empty() {
+            let this = &*self;
+            coupling.extend(this.cells.iter().map(|&c| {
+                let c = c as usize;
+                this.neighbors(c).map(|n| match n {
+                    Some(n) if this.is_fluid(n) => this.off * this.face(c, n),
+                    _ => 0.0,
+                })
+            }));
+        }
+        self.coupling = coupling;
     }
 
     /// The equations of the same cells with every air neighbour at a whole cell (`θ = 1`):
@@ -192,12 +238,14 @@ impl Laplacian {
     pub fn set_plain_diagonal(&mut self) {
         for c in 0..self.len() {
             self.diag[c] = if self.is_fluid(c) {
-                let open = self
-                    .neighbors(c)
-                    .into_iter()
-                    .filter(|&n| self.kind_of(n) != CellKind::Solid)
-                    .count();
-                open as f32 * self.off
+                let open: f32 = (self.neighbors(c).into_iter())
+                    .map(|n| match (n, self.kind_of(n)) {
+                        (Some(n), CellKind::Fluid) => self.face(c, n),
+                        (_, CellKind::Air) => 1.0 / self.ratio_of(c),
+                        _ => 0.0,
+                    })
+                    .sum();
+                open * self.off
             } else {
                 0.0
             };
@@ -231,6 +279,22 @@ impl Laplacian {
                 CellKind::Solid
             }
         }));
+        coarse.ratio.clear();
+        if !self.ratio.is_empty() {
+            // A coarse cell's ratio: the mean of its fluid cells'.
+            coarse.ratio.extend((0..nx * ny).map(|c| {
+                let (ci, cj) = (c % nx, c / nx);
+                let (mut sum, mut count) = (0.0, 0);
+                for (i, j) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+                    let (i, j) = (2 * ci + i, 2 * cj + j);
+                    if i < self.nx && j < self.ny && self.is_fluid(j * self.nx + i) {
+                        sum += self.ratio[j * self.nx + i];
+                        count += 1;
+                    }
+                }
+                if count > 0 { sum / count as f32 } else { 1.0 }
+            }));
+        }
         coarse.diag.clear();
         coarse.diag.resize(nx * ny, 0.0);
         coarse.set_plain_diagonal();

@@ -91,6 +91,9 @@ pub struct GridInput<'a> {
     pub gravity: Vec2,
     /// The tank, if any: cells outside it are solid.
     pub tank: Option<Tank>,
+    /// Each particle's rest density over `rest_density`, by the order of `positions`; empty
+    /// for one liquid.
+    pub ratios: &'a [f32],
 }
 
 /// What the last solve did.
@@ -183,6 +186,7 @@ impl GridPressure {
         }
         self.classify(input.tank, &solid, parallel);
         self.splat_fill(input, parallel);
+        self.splat_ratios(input);
         self.assemble_equations();
         self.multigrid.rebuild(&self.equations);
         true
@@ -374,6 +378,30 @@ impl GridPressure {
         }
     }
 
+    /// Step 2 with two liquids: each cell's rest density ratio, the mean of the particles' in
+    /// it (one where none is). The equations then read `∇·(∇p/r) = (ρ₀/dt) ∇·u`: a heavier
+    /// liquid's pressure rises the faster with depth.
+    fn splat_ratios(&mut self, input: &GridInput) {
+        let e = &mut self.equations;
+        e.ratio.clear();
+        if input.ratios.is_empty() {
+            return;
+        }
+        let mut sums = vec![(0.0f32, 0u32); e.len()];
+        let origin = self.first.as_vec2();
+        for (x, &r) in input.positions.iter().zip(input.ratios) {
+            let at = (*x / self.cell - origin).floor();
+            if at.x >= 0.0 && at.y >= 0.0 && (at.x as usize) < e.nx && (at.y as usize) < e.ny {
+                let sum = &mut sums[at.y as usize * e.nx + at.x as usize];
+                *sum = (sum.0 + r, sum.1 + 1);
+            }
+        }
+        e.ratio.extend(
+            sums.iter()
+                .map(|&(sum, n)| if n > 0 { sum / n as f32 } else { 1.0 }),
+        );
+    }
+
     /// Step 3, the particles' `velocities`: each face's, a solid's on its faces.
     fn splat_faces(&mut self, input: &GridInput, velocities: &[Vec2], parallel: &impl Parallel) {
         let (nx, ny) = (self.equations.nx, self.equations.ny);
@@ -427,9 +455,10 @@ impl GridPressure {
             let mut diag = 0.0;
             for n in e.neighbors(c) {
                 diag += match e.kind_of(n) {
-                    CellKind::Fluid => 1.0,
+                    CellKind::Fluid => e.face(c, n.expect("fluid is inside")),
                     CellKind::Air => {
-                        1.0 / theta(self.fill[c], self.fill[n.expect("air is inside")])
+                        let theta = theta(self.fill[c], self.fill[n.expect("air is inside")]);
+                        1.0 / (theta * e.ratio_of(c))
                     }
                     CellKind::Solid => 0.0,
                 };
@@ -527,7 +556,7 @@ impl GridPressure {
         for n in neighbors.into_iter().flatten().filter(|&n| e.is_fluid(n)) {
             let p = self.pressure[n] as f32;
             sum += if kind == CellKind::Solid {
-                p + self.weight.dot(self.center(c) - self.center(n))
+                p + e.ratio_of(n) * self.weight.dot(self.center(c) - self.center(n))
             } else {
                 p * (1.0 - 1.0 / theta(self.fill[n], self.fill[c]))
             };

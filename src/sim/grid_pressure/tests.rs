@@ -32,6 +32,7 @@ struct Input<'a> {
 
 fn input<'a>(positions: &'a [Vec2], velocities: &'a [Vec2], tank: Tank) -> Input<'a> {
     let grid = GridInput {
+        ratios: &[],
         positions,
         spacing: SPACING,
         rest_density: RHO,
