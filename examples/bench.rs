@@ -31,7 +31,9 @@
 
 use bevy::prelude::*;
 use bevy::time::TimeUpdateStrategy;
-use bevy_sph2d::fluid::{DfsphSettings, Pose, PressureSolver, SphParams, SphSolver, Tank};
+use bevy_sph2d::fluid::{
+    DfsphSettings, Pose, Position, PressureSolver, SphParams, SphSolver, Tank,
+};
 use bevy_sph2d::gameplay::SCENARIO_TANK;
 use bevy_sph2d::gameplay::{FluidBlock, ScenarioKind, SphScenario};
 use bevy_sph2d::gravity::Multipole;
@@ -113,6 +115,10 @@ struct Cli {
     /// Surface tension, N/m (0: none), to measure what its pass costs.
     #[arg(long, default_value_t = 0.0, conflicts_with = "gravity")]
     surface_tension: f32,
+    /// With --realtime: the right half of the column a second liquid this many times the
+    /// water's density (0.25-4), to measure what two liquids cost.
+    #[arg(long, requires = "realtime")]
+    second_liquid: Option<f32>,
 }
 
 impl Cli {
@@ -120,6 +126,9 @@ impl Cli {
     /// and the DFSPH budget of --density-iterations and --divergence-iterations, if given.
     fn budgeted(&self, mut params: SphParams) -> SphParams {
         params.surface_tension = self.surface_tension;
+        if let Some(ratio) = self.second_liquid {
+            params.liquids = vec![Liquid::new("second", ratio * params.rest_density)];
+        }
         if self.reference {
             params.dfsph = DfsphSettings::reference();
         }
@@ -365,6 +374,16 @@ fn ecs_run(
     (ecs_steps, seconds, iterations)
 }
 
+/// Makes the right half of the fluid (by position) the second liquid.
+fn second_liquid_on_the_right(world: &mut World) {
+    let mut query = world.query_filtered::<(Entity, &Position), With<FluidParticle>>();
+    let mut xs: Vec<(Entity, f32)> = query.iter(world).map(|(e, p)| (e, p.0.x)).collect();
+    xs.sort_by(|a, b| a.1.total_cmp(&b.1));
+    for &(entity, _) in &xs[xs.len() / 2..] {
+        world.entity_mut(entity).insert(FluidMaterial(1));
+    }
+}
+
 /// The demo's dam break through the ECS for one simulated second: how fast it runs against the
 /// clock.
 fn realtime_bench(cli: &Cli) {
@@ -398,6 +417,9 @@ fn realtime_bench(cli: &Cli) {
     .insert_resource(TimeUpdateStrategy::FixedTimesteps(1));
     for block in scenario.blocks(&tank) {
         block.spawn(app.world_mut());
+    }
+    if cli.second_liquid.is_some() {
+        second_liquid_on_the_right(app.world_mut());
     }
     app.update();
     eprintln!(
