@@ -14,14 +14,15 @@
 mod demo;
 
 use bevy::prelude::*;
-use bevy::render::view::screenshot::{Screenshot, save_to_disk};
-use bevy_sph2d::fluid::{ContactAngle, Solid, SolidShape, SphParams, SphPlugin, SphStats, Tank};
+use bevy_sph2d::fluid::{ContactAngle, Solid, SolidShape, SphParams, SphPlugin, Tank};
 use bevy_sph2d::gameplay::{
     EmitterRate, FluidDrain, FluidEmitter, FluidRegion, ScenarioKind, SphScenario,
 };
 use bevy_sph2d::render::{ParticleCamera, ParticleDraw, ParticleView, RenderMode};
 use bevy_sph2d::{ParticlePlugins, ParticleUiPlugins};
-use demo::{headless_plugins, limit_catch_up, run_headless, window_plugins};
+use demo::{
+    ScreenshotAt, headless_plugins, limit_catch_up, run_headless, take_screenshot, window_plugins,
+};
 
 /// The box, m.
 const BOX: Vec2 = Vec2::new(0.09, 0.05);
@@ -67,28 +68,8 @@ fn main() {
             let seconds = args.get(i + 1).and_then(|s| s.parse().ok()).unwrap_or(5.0);
             headless(seconds);
         }
-        None => {
-            let shot = args.iter().position(|a| a == "--screenshot").map(|i| {
-                let path = args.get(i + 1).cloned().unwrap_or("droplets.png".into());
-                let after = args.get(i + 2).and_then(|s| s.parse().ok()).unwrap_or(8.0);
-                ScreenshotAt {
-                    path,
-                    after,
-                    taken: None,
-                }
-            });
-            window(shot)
-        }
+        None => window(ScreenshotAt::from_args(&args, "droplets.png", 8.0)),
     }
-}
-
-/// Where and when (simulated seconds) to save the window, then quit.
-#[derive(Resource)]
-struct ScreenshotAt {
-    path: String,
-    after: f64,
-    /// Frames since it was taken.
-    taken: Option<u32>,
 }
 
 /// The example in a window, with sprites drawn as liquid, the mouse tools and the panel.
@@ -182,37 +163,6 @@ fn spawn_scene(mut commands: Commands) {
 
 fn spawn_camera(mut commands: Commands) {
     commands.spawn(ParticleCamera::default());
-}
-
-/// Saves the window once the simulation reaches the [`ScreenshotAt`] time, and quits a few
-/// frames later (once it is written).
-fn take_screenshot(
-    mut commands: Commands,
-    mut shot: ResMut<ScreenshotAt>,
-    stats: Res<SphStats>,
-    time: Res<Time<Virtual>>,
-    real: Res<Time<Real>>,
-    mut exit: MessageWriter<AppExit>,
-) {
-    match shot.taken {
-        None if time.elapsed_secs_f64() >= shot.after => {
-            info!(
-                "screenshot at {:.1} simulated s after {:.1} s: {} particles",
-                stats.time,
-                real.elapsed_secs_f64(),
-                stats.particles,
-            );
-            commands
-                .spawn(Screenshot::primary_window())
-                .observe(save_to_disk(shot.path.clone()));
-            shot.taken = Some(0);
-        }
-        Some(frames) if frames > 10 => {
-            exit.write(AppExit::Success);
-        }
-        Some(frames) => shot.taken = Some(frames + 1),
-        None => {}
-    }
 }
 
 /// `T` stops and restarts the taps.

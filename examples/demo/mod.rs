@@ -142,3 +142,58 @@ pub fn run_headless(name: &str, mut app: App, seconds: f64) {
         stats.total_iterations
     );
 }
+
+/// Where and when (simulated seconds) to save the window, then quit (`--screenshot FILE S`).
+#[derive(Resource)]
+pub struct ScreenshotAt {
+    path: String,
+    after: f64,
+    /// Frames since it was taken.
+    taken: Option<u32>,
+}
+
+impl ScreenshotAt {
+    /// From `--screenshot [FILE [SECONDS]]` in `args`, with defaults `path` and `after`.
+    pub fn from_args(args: &[String], path: &str, after: f64) -> Option<Self> {
+        args.iter().position(|a| a == "--screenshot").map(|i| Self {
+            path: args.get(i + 1).cloned().unwrap_or(path.into()),
+            after: args
+                .get(i + 2)
+                .and_then(|s| s.parse().ok())
+                .unwrap_or(after),
+            taken: None,
+        })
+    }
+}
+
+/// Saves the window once the simulation reaches the [`ScreenshotAt`] time, and quits a few
+/// frames later (once it is written).
+pub fn take_screenshot(
+    mut commands: Commands,
+    mut shot: ResMut<ScreenshotAt>,
+    stats: Res<bevy_sph2d::fluid::SphStats>,
+    time: Res<Time<Virtual>>,
+    real: Res<Time<Real>>,
+    mut exit: MessageWriter<AppExit>,
+) {
+    use bevy::render::view::screenshot::{Screenshot, save_to_disk};
+    match shot.taken {
+        None if time.elapsed_secs_f64() >= shot.after => {
+            info!(
+                "screenshot at {:.1} simulated s after {:.1} s: {} particles",
+                stats.time,
+                real.elapsed_secs_f64(),
+                stats.particles,
+            );
+            commands
+                .spawn(Screenshot::primary_window())
+                .observe(save_to_disk(shot.path.clone()));
+            shot.taken = Some(0);
+        }
+        Some(frames) if frames > 10 => {
+            exit.write(AppExit::Success);
+        }
+        Some(frames) => shot.taken = Some(frames + 1),
+        None => {}
+    }
+}

@@ -142,6 +142,7 @@ impl Plugin for SphPlugin {
             .register_type::<SphStats>()
             .register_type::<FluidParticle>()
             .register_type::<FluidMaterial>()
+            .register_type::<Liquid>()
             .register_type::<Position>()
             .register_type::<Velocity>()
             .register_type::<Acceleration>()

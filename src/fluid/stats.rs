@@ -1,13 +1,14 @@
 //! The fluid's statistics, at the end of the tick ([`SphSystems::Finish`](super::SphSystems::Finish)).
 
 use super::components::{Density, FluidParticle, Velocity};
+use super::liquids::FluidMaterial;
 use super::resources::{SphSolver, SphStats};
 use bevy::prelude::*;
 
 /// Fills [`SphStats`] after the tick.
 pub(crate) fn update_stats(
     solver: Res<SphSolver>,
-    particles: Query<(&Velocity, &Density), With<FluidParticle>>,
+    particles: Query<(&Velocity, &Density, Option<&FluidMaterial>), With<FluidParticle>>,
     mut stats: ResMut<SphStats>,
 ) {
     let c = solver.constants();
@@ -15,10 +16,15 @@ pub(crate) fn update_stats(
     let mut max_speed_sq = 0.0f32;
     let mut max_error = 0.0f32;
     let mut sum_error = 0.0f64;
-    for (velocity, density) in &particles {
+    for (velocity, density, material) in &particles {
         count += 1;
         max_speed_sq = max_speed_sq.max(velocity.length_squared());
-        let error = (density.0 / c.rest_density - 1.0).max(0.0);
+        // Against the particle's own liquid's rest density.
+        let ratio = material
+            .and_then(|m| solver.density_ratios.get(m.0 as usize))
+            .copied()
+            .unwrap_or(1.0);
+        let error = (density.0 / (ratio * c.rest_density) - 1.0).max(0.0);
         max_error = max_error.max(error);
         sum_error += error as f64;
     }

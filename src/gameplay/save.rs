@@ -1,12 +1,13 @@
-//! Saving and restoring the fluid: every particle's position, velocity and solver stiffness in
-//! order, the [`SphParams`] and the sub-step clock, as one JSON document (`serde_json`; the
+//! Saving and restoring the fluid: every particle's position, velocity, solver stiffness and
+//! liquid ([`FluidMaterial`]) in order, the [`SphParams`] (with its liquids) and the sub-step
+//! clock, as one JSON document (`serde_json`; the
 //! parameters through Bevy's reflection serializer, so a new parameter needs no code here).
 //! Restoring into an app with the same plugins reproduces the run bit for bit. See
 //! [`SphPlugin`](crate::fluid::SphPlugin) and the format table in `docs/guide.md` ("Save and restore").
 
 use crate::fluid::SphParams;
 use crate::fluid::SphSolver;
-use crate::fluid::{FluidParticle, Position, Stiffness, Velocity};
+use crate::fluid::{FluidMaterial, FluidParticle, Position, Stiffness, Velocity};
 use crate::sim::clock::SubstepClock;
 use bevy::prelude::*;
 use bevy::reflect::serde::{TypedReflectDeserializer, TypedReflectSerializer};
@@ -77,6 +78,10 @@ struct Document {
     velocity: Vec<[f32; 2]>,
     /// `[κ, κᵛ]`, m²/s² (the divergence-free solver's warm start).
     stiffness: Vec<[f32; 2]>,
+    /// Each particle's [`FluidMaterial`]; empty (or missing, in a snapshot written before two
+    /// liquids) when every particle is the base liquid.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    material: Vec<u8>,
 }
 
 /// The fluid's whole state as JSON text: the particles in the order the solver visits them, the
@@ -89,13 +94,20 @@ pub fn save_fluid(world: &mut World) -> Result<String, SnapshotError> {
         .and_then(serde_json::value::RawValue::from_string)
         .map_err(|e| SnapshotError::Format(e.to_string()))?;
     let clock = *world.resource::<SphSolver>().clock();
-    let mut query =
-        world.query_filtered::<(&Position, &Velocity, &Stiffness), With<FluidParticle>>();
+    let mut query = world.query_filtered::<
+        (&Position, &Velocity, &Stiffness, Option<&FluidMaterial>),
+        With<FluidParticle>,
+    >();
     let (mut position, mut velocity, mut stiffness) = (Vec::new(), Vec::new(), Vec::new());
-    for (p, v, k) in query.iter(world) {
+    let mut material = Vec::new();
+    for (p, v, k, m) in query.iter(world) {
         position.push(p.0.to_array());
         velocity.push(v.0.to_array());
         stiffness.push(k.0.to_array());
+        material.push(m.map_or(0, |m| m.0));
+    }
+    if material.iter().all(|&m| m == 0) {
+        material.clear();
     }
     let document = Document {
         format: SNAPSHOT_FORMAT.into(),
@@ -112,6 +124,7 @@ pub fn save_fluid(world: &mut World) -> Result<String, SnapshotError> {
         position,
         velocity,
         stiffness,
+        material,
     };
     serde_json::to_string(&document).map_err(|e| SnapshotError::Format(e.to_string()))
 }
@@ -155,6 +168,12 @@ pub fn load_fluid(world: &mut World, text: &str) -> Result<usize, SnapshotError>
             document.stiffness.len()
         )));
     }
+    if !(document.material.is_empty() || document.material.len() == n) {
+        return Err(SnapshotError::Particles(format!(
+            "{n} positions and {} materials",
+            document.material.len()
+        )));
+    }
     let finite = |list: &[[f32; 2]]| list.iter().flatten().all(|v| v.is_finite());
     if !(finite(&document.position) && finite(&document.velocity) && finite(&document.stiffness)) {
         return Err(SnapshotError::Particles("a value is not finite".into()));
@@ -186,18 +205,21 @@ pub fn load_fluid(world: &mut World, text: &str) -> Result<usize, SnapshotError>
             dropped: c.dropped,
             ..default()
         });
+    let material = |i: usize| FluidMaterial(document.material.get(i).copied().unwrap_or(0));
     world.spawn_batch(
         document
             .position
             .iter()
             .zip(&document.velocity)
             .zip(&document.stiffness)
-            .map(|((p, v), k)| {
+            .enumerate()
+            .map(|(i, ((p, v), k))| {
                 (
                     FluidParticle,
                     Position(Vec2::from_array(*p)),
                     Velocity(Vec2::from_array(*v)),
                     Stiffness(Vec2::from_array(*k)),
+                    material(i),
                 )
             })
             .collect::<Vec<_>>(),

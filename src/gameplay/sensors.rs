@@ -5,7 +5,7 @@
 
 use crate::fluid::SphParams;
 use crate::fluid::SphSolver;
-use crate::fluid::{Density, FluidParticle, Position, Pressure, Velocity};
+use crate::fluid::{Density, FluidMaterial, FluidParticle, Position, Pressure, Velocity};
 use crate::sim::region::FluidRegion;
 use bevy::ecs::system::SystemParam;
 use bevy::prelude::*;
@@ -33,6 +33,8 @@ pub struct FluidSensor {
     pub enter_fill: f32,
     /// Fill fraction at which fluid counts as gone (below `enter_fill`).
     pub leave_fill: f32,
+    /// Only this liquid's particles count, if set (every liquid's otherwise).
+    pub material: Option<FluidMaterial>,
     /// The last tick's measurement (written by the plugin).
     pub reading: SensorReading,
     /// Whether fluid has arrived and not left since (written by the plugin).
@@ -48,6 +50,7 @@ impl FluidSensor {
             region,
             enter_fill: 0.05,
             leave_fill: 0.02,
+            material: None,
             reading: SensorReading::default(),
             wet: false,
             warned: false,
@@ -58,6 +61,12 @@ impl FluidSensor {
     pub fn with_thresholds(mut self, enter_fill: f32, leave_fill: f32) -> Self {
         self.enter_fill = enter_fill;
         self.leave_fill = leave_fill;
+        self
+    }
+
+    /// The same, counting only the liquid `material`'s particles.
+    pub fn for_material(mut self, material: FluidMaterial) -> Self {
+        self.material = Some(material);
         self
     }
 
@@ -112,11 +121,22 @@ pub struct FluidLeft {
     pub fill: f32,
 }
 
+/// What a sensor reads of each particle: its state and its liquid.
+type SensedData = (
+    (
+        &'static Position,
+        &'static Velocity,
+        &'static Density,
+        &'static Pressure,
+    ),
+    Option<&'static FluidMaterial>,
+);
+
 /// Measures every [`FluidSensor`] and sends the crossing messages.
 pub(crate) fn run_sensors(
     params: Res<SphParams>,
     mut sensors: Query<(Entity, &mut FluidSensor)>,
-    particles: Query<(&Position, &Velocity, &Density, &Pressure), With<FluidParticle>>,
+    particles: Query<SensedData, With<FluidParticle>>,
     mut entered: MessageWriter<FluidEntered>,
     mut left: MessageWriter<FluidLeft>,
 ) {
@@ -129,11 +149,12 @@ pub(crate) fn run_sensors(
             }
             continue;
         }
-        let region = sensor.region;
+        let (region, only) = (sensor.region, sensor.material);
         let (mut count, mut density, mut velocity, mut pressure) =
             (0u32, 0.0f64, Vec2::ZERO, 0.0f64);
-        for (position, v, rho, p) in &particles {
-            if region.contains(position.0) {
+        for ((position, v, rho, p), material) in &particles {
+            let material = material.copied().unwrap_or_default();
+            if region.contains(position.0) && only.is_none_or(|only| only == material) {
                 count += 1;
                 density += rho.0 as f64;
                 velocity += v.0;

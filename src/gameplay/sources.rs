@@ -4,7 +4,7 @@
 //! solver. See [`SphPlugin`](crate::fluid::SphPlugin).
 
 use crate::fluid::SphParams;
-use crate::fluid::{FluidParticle, Position, Velocity};
+use crate::fluid::{FluidMaterial, FluidParticle, Position, Velocity};
 use crate::fluid::{Pose, Solid, pose_of};
 use crate::sim::region::FluidRegion;
 use bevy::prelude::*;
@@ -52,6 +52,8 @@ pub struct FluidEmitter {
     pub active: bool,
     /// At most this many particles in all, if set.
     pub budget: Option<u32>,
+    /// Which liquid it pours (see [`FluidMaterial`]; the base liquid by default).
+    pub material: FluidMaterial,
     /// Particles emitted so far (written by the plugin).
     pub emitted: u32,
     /// Rows owed but not yet emitted (fraction carried between ticks).
@@ -72,10 +74,17 @@ impl FluidEmitter {
             rate,
             active: true,
             budget: None,
+            material: FluidMaterial(0),
             emitted: 0,
             owed: 0.0,
             warned: false,
         }
+    }
+
+    /// The same, pouring the liquid `material` (see [`SphParams::liquids`]).
+    pub fn with_material(mut self, material: FluidMaterial) -> Self {
+        self.material = material;
+        self
     }
 
     /// The same, stopping after `particles` particles.
@@ -237,11 +246,14 @@ pub(crate) fn run_emitters(
             spot,
         );
         let stuck = spawned.is_empty() && emitter.owed >= 1.0;
-        let speed = emitter.direction.normalize() * emitter.speed;
+        let (speed, material) = (
+            emitter.direction.normalize() * emitter.speed,
+            emitter.material,
+        );
         commands.spawn_batch(
             spawned
                 .into_iter()
-                .map(move |p| (FluidParticle, Position(p), Velocity(speed)))
+                .map(move |p| (FluidParticle, Position(p), Velocity(speed), material))
                 .collect::<Vec<_>>(),
         );
         if stuck && !emitter.warned && !spot(centre, &[]) {

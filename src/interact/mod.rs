@@ -6,7 +6,9 @@ mod tools;
 
 use crate::control::{ResetSimulation, SimulationControl, simulation_running};
 use crate::fluid::SubstepHooks;
-use crate::fluid::{Acceleration, FluidParticle, SphParams, SphSubstep, SphSubstepSystems};
+use crate::fluid::{
+    Acceleration, FluidMaterial, FluidParticle, SphParams, SphSubstep, SphSubstepSystems,
+};
 use crate::gameplay::{EmitterRate, FluidEmitter, LoadSlot, SaveSlot};
 use crate::gravity::{GravityAcceleration, Mass};
 use crate::particle::{Position, Velocity};
@@ -91,6 +93,8 @@ pub struct PointerSettings {
     pub pour_speed: f32,
     /// Pouring stops at this many particles.
     pub max_particles: usize,
+    /// The liquid the pour tool pours (see [`FluidMaterial`]; `M` cycles through them).
+    pub pour_material: FluidMaterial,
     /// How fast the arrow keys tilt the tank, rad/s.
     pub tilt_rate: f32,
     /// Largest tilt, rad.
@@ -110,6 +114,7 @@ impl Default for PointerSettings {
             rate: 12.0,
             pour_speed: 1.5,
             max_particles: 20_000,
+            pour_material: FluidMaterial(0),
             tilt_rate: 0.8,
             max_tilt: 1.0,
             body_mass: 1.0e-4,
@@ -321,6 +326,7 @@ fn aim_pour_nozzle(
         .clamp(spacing, MAX_POUR_ROW as f32 * spacing);
     emitter.direction = jet;
     emitter.speed = jet.length();
+    emitter.material = settings.pour_material;
     // One row per spacing of jet, and a few a tick at most however fast the cursor flicks.
     let most = MAX_POUR_ROWS_PER_TICK / time.delta_secs().max(1e-6);
     let rows_per_second = (emitter.speed / spacing).min(most);
@@ -446,6 +452,10 @@ fn keyboard_controls(
     }
     if keys.just_pressed(KeyCode::F9) {
         commands.queue(LoadSlot);
+    }
+    if keys.just_pressed(KeyCode::KeyM) {
+        let liquids = params.liquids.len() as u8 + 1;
+        settings.pour_material = FluidMaterial((settings.pour_material.0 + 1) % liquids);
     }
     if keys.just_pressed(KeyCode::KeyL)
         && let Some(mut view) = view

@@ -4,7 +4,10 @@
 mod widgets;
 
 use crate::control::{ResetSimulation, SimulationControl};
-use crate::fluid::{KernelKind, PressureSolver, SphParams, SphParamsStatus, SphStats};
+use crate::fluid::{
+    FluidMaterial, KernelKind, Liquid, MAX_DENSITY_RATIO, PressureSolver, SphParams,
+    SphParamsStatus, SphStats,
+};
 use crate::gameplay::{LoadSlot, SaveSlot, ScenarioKind, SnapshotSlot, SphScenario};
 use crate::gravity::{GravityParams, GravityStats, Multipole};
 use crate::interact::{Pointer, PointerSettings, PointerTool};
@@ -248,7 +251,7 @@ fn controls_section(
         }
         None => {}
     }
-    ui.small("Mouse: left = tool, right = push, wheel = radius. Left/Right arrows tilt, Up levels, 1–5 tools, L liquid/particles, F5/F9 save/load, Tab hides the panel.");
+    ui.small("Mouse: left = tool, right = push, wheel = radius. Left/Right arrows tilt, Up levels, 1–5 tools, M the liquid poured, L liquid/particles, F5/F9 save/load, Tab hides the panel.");
 }
 
 /// Whether the scene has fluid: a scenario that spawns some, or particles.
@@ -376,6 +379,7 @@ fn fluid_section(ui: &mut egui::Ui, data: &mut PanelData, fluid: bool) {
             let mut p = data.params.clone();
             fluid_presets(ui, &mut p, &mut data.liquid);
             fluid_material(ui, &mut p);
+            fluid_liquids(ui, &mut p, &data.liquid);
             fluid_solver(ui, &mut p);
             ui.small(format!(
                 "particle spacing Δx = {:.1} mm (set by the scenario's particle count)",
@@ -407,6 +411,12 @@ fn fluid_presets(ui: &mut egui::Ui, p: &mut SphParams, liquid: &mut LiquidStyle)
             max_substeps: current.max_substeps,
             solver: current.solver,
             dfsph: current.dfsph,
+            // A gas's rest density leaves no liquid within range of it.
+            liquids: if preset.background_pressure > 0.0 {
+                Vec::new()
+            } else {
+                current.liquids.clone()
+            },
             speed_of_sound: if preset.background_pressure > 0.0 {
                 preset.speed_of_sound
             } else {
@@ -457,6 +467,43 @@ fn fluid_material(ui: &mut egui::Ui, p: &mut SphParams) {
         field_slider(ui, p, &SphParams::TANK_WIDTH);
         field_slider(ui, p, &SphParams::TANK_HEIGHT);
     }
+}
+
+/// The liquids besides the base one: each one's rest density, and buttons that add oil or brine
+/// and remove the last (removing one from the middle would change the others' materials).
+fn fluid_liquids(ui: &mut egui::Ui, p: &mut SphParams, style: &LiquidStyle) {
+    ui.label(format!(
+        "liquids: base ({} kg/m³){}",
+        p.rest_density,
+        if p.liquids.is_empty() { ", alone" } else { "" }
+    ));
+    let (low, high) = (
+        p.rest_density / MAX_DENSITY_RATIO,
+        p.rest_density * MAX_DENSITY_RATIO,
+    );
+    for (k, liquid) in p.liquids.iter_mut().enumerate() {
+        let color = style.liquid_color(k + 1, &liquid.name).to_srgba();
+        let swatch = egui::Color32::from_rgb(
+            (color.red * 255.0) as u8,
+            (color.green * 255.0) as u8,
+            (color.blue * 255.0) as u8,
+        );
+        ui.horizontal(|ui| {
+            ui.colored_label(swatch, format!("{} {}", k + 1, liquid.name));
+            param_slider(ui, &mut liquid.rest_density, low..=high, "", "kg/m³", false);
+        });
+    }
+    ui.horizontal(|ui| {
+        if ui.button("+ Oil").clicked() {
+            p.liquids.push(Liquid::oil());
+        }
+        if ui.button("+ Brine").clicked() {
+            p.liquids.push(Liquid::brine());
+        }
+        if !p.liquids.is_empty() && ui.button("Remove last").clicked() {
+            p.liquids.pop();
+        }
+    });
 }
 
 /// The pressure solver and its settings, the sub-step budget and the walls' restitution.
@@ -739,6 +786,23 @@ fn tools_section(ui: &mut egui::Ui, data: &mut PanelData) {
                 "m/s",
                 false,
             );
+            if !data.params.liquids.is_empty() {
+                let name = |k: u8| match k.checked_sub(1) {
+                    None => "base".to_string(),
+                    Some(i) => data.params.liquids[i as usize].name.clone(),
+                };
+                egui::ComboBox::from_label("pours (M)")
+                    .selected_text(name(tools.pour_material.0))
+                    .show_ui(ui, |ui| {
+                        for k in 0..=data.params.liquids.len() as u8 {
+                            ui.selectable_value(
+                                &mut tools.pour_material,
+                                FluidMaterial(k),
+                                name(k),
+                            );
+                        }
+                    });
+            }
             ui.label(format!("tilt {:.0}°", data.pointer.tilt.to_degrees()));
             if tools != *data.tools {
                 *data.tools = tools;

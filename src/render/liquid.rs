@@ -14,7 +14,7 @@
 use super::{
     ParticleCamera, ParticleDraw, ParticleView, PreviousPosition, RenderMode, shown_value,
 };
-use crate::fluid::{Density, FluidParticle, Pressure, SphParams};
+use crate::fluid::{Density, FluidMaterial, FluidParticle, Pressure, SphParams};
 use crate::particle::{Position, Velocity};
 use bevy::asset::{AssetPath, RenderAssetUsages, embedded_asset, embedded_path};
 use bevy::camera::visibility::{NoFrustumCulling, RenderLayers};
@@ -64,6 +64,10 @@ pub struct LiquidStyle {
     pub foam_color: Color,
     /// The speed at which the liquid is all foam, m/s (foam starts at a third of it).
     pub foam_speed: f32,
+    /// The colours of the liquids besides the base one (`SphParams::liquids`, in order), just
+    /// under the surface; they deepen as the base liquid's do. A liquid without one here takes
+    /// [`liquid_color`](Self::liquid_color)'s choice for its name.
+    pub liquid_colors: Vec<Color>,
 }
 
 impl Default for LiquidStyle {
@@ -86,6 +90,35 @@ impl LiquidStyle {
             rim_width: 0.8,
             foam_color: Color::srgba(0.92, 0.97, 1.0, 0.85),
             foam_speed: 3.0,
+            liquid_colors: Vec::new(),
+        }
+    }
+
+    /// The most liquids the view tells apart (the base one included); the rest take the last
+    /// one's colour.
+    pub const MAX_LIQUIDS: usize = 8;
+
+    /// The colour of liquid `k` (1 the first of `SphParams::liquids`) called `name`, just under
+    /// the surface: [`liquid_colors`](Self::liquid_colors)' if it has one, else amber for oil,
+    /// green for brine and a colour of a small palette for any other.
+    pub fn liquid_color(&self, k: usize, name: &str) -> Color {
+        if let Some(&color) = k.checked_sub(1).and_then(|i| self.liquid_colors.get(i)) {
+            return color;
+        }
+        let name = name.to_lowercase();
+        if name.contains("oil") {
+            Color::srgba(0.96, 0.74, 0.16, 0.95)
+        } else if name.contains("brine") || name.contains("salt") {
+            Color::srgba(0.16, 0.70, 0.52, 0.95)
+        } else {
+            const PALETTE: [(f32, f32, f32); 4] = [
+                (0.86, 0.30, 0.36),
+                (0.60, 0.40, 0.86),
+                (0.95, 0.55, 0.20),
+                (0.45, 0.80, 0.25),
+            ];
+            let (r, g, b) = PALETTE[k % PALETTE.len()];
+            Color::srgba(r, g, b, 0.95)
         }
     }
 
@@ -180,8 +213,11 @@ pub(crate) struct LiquidUniform {
     foam: Vec4,
     /// Threshold, rim width (px), foam speed (m/s), depth (texture heights).
     shape: Vec4,
-    /// 1 to colour through the colour map.
+    /// x: 1 to colour through the colour map; y: 1 to colour each liquid its own.
     options: Vec4,
+    /// Each liquid's colour under the surface and deep down, by its rank in rest density.
+    shallows: [Vec4; LiquidStyle::MAX_LIQUIDS],
+    deeps: [Vec4; LiquidStyle::MAX_LIQUIDS],
 }
 
 /// The surface quad's material (see `liquid.wgsl`).
@@ -426,7 +462,25 @@ pub(crate) type SplatData = (
     &'static Velocity,
     &'static Density,
     &'static Pressure,
+    Option<&'static FluidMaterial>,
 );
+
+/// Each material's rank among the liquids by rest density (the base liquid's 0 with one
+/// liquid), capped at the view's last: where two liquids meet, the field's material average
+/// lies between neighbouring ranks, and the surface shader snaps it to the nearer.
+fn ranks(params: &SphParams) -> Vec<f32> {
+    let mut order: Vec<usize> = (0..=params.liquids.len()).collect();
+    let density = |k: usize| match k {
+        0 => params.rest_density,
+        k => params.liquids[k - 1].rest_density,
+    };
+    order.sort_by(|&a, &b| density(a).total_cmp(&density(b)));
+    let mut rank = vec![0.0; order.len()];
+    for (r, &k) in order.iter().enumerate() {
+        rank[k] = r.min(LiquidStyle::MAX_LIQUIDS - 1) as f32;
+    }
+    rank
+}
 
 /// Rebuilds the splat mesh from the particles (four vertices each, at their interpolated
 /// positions, carrying weight, speed and colour-map position), and the surface material from
@@ -465,16 +519,23 @@ pub(crate) fn update_liquid(
     };
     let mode = particle_view.mode;
     let range = particle_view.range;
+    let rank = ranks(&params);
+    let rank_of = |m: Option<&FluidMaterial>| {
+        m.and_then(|m| rank.get(m.0 as usize))
+            .copied()
+            .unwrap_or(rank[0])
+    };
     if let Some(mut mesh) = meshes.get_mut(&view.splats) {
         view.bounds = write_splats(
             &mut mesh,
-            particles.iter().map(|(position, previous, v, rho, p)| {
+            particles.iter().map(|(position, previous, v, rho, p, m)| {
                 let at = previous.0.lerp(position.0, alpha);
                 let value = match mode {
                     RenderMode::Solid => 0.0,
                     mode => range.normalize(shown_value(mode, v, rho, p)),
                 };
-                (at, [weight, weight * v.length(), weight * value, weight])
+                let material = weight * rank_of(m);
+                (at, [weight, weight * v.length(), weight * value, material])
             }),
             radius,
         );
@@ -493,7 +554,10 @@ pub(crate) fn update_liquid(
     let metres_per_pixel = windows
         .single()
         .map_or(spacing, |w| view_height / w.height().max(1.0));
-    let settings = liquid_uniform(&style, mode, spacing, view_height, metres_per_pixel);
+    let mut settings = liquid_uniform(&style, mode, spacing, view_height, metres_per_pixel);
+    if !params.liquids.is_empty() && mode == RenderMode::Solid {
+        color_liquids(&mut settings, &style, &params, &rank);
+    }
     if let Some(material) = materials.get(&view.material)
         && material.settings != settings
         && let Some(mut material) = materials.get_mut(&view.material)
@@ -528,7 +592,43 @@ fn liquid_uniform(
             0.0,
             0.0,
         ),
+        shallows: [Vec4::ZERO; LiquidStyle::MAX_LIQUIDS],
+        deeps: [Vec4::ZERO; LiquidStyle::MAX_LIQUIDS],
     }
+}
+
+/// Sets each liquid's colours in `settings` by its rank, and switches them on: the base liquid
+/// the style's own, the others [`LiquidStyle::liquid_color`] deepened as the base liquid's is.
+fn color_liquids(
+    settings: &mut LiquidUniform,
+    style: &LiquidStyle,
+    params: &SphParams,
+    rank: &[f32],
+) {
+    let base = (
+        style.shallow_color.to_linear(),
+        style.deep_color.to_linear(),
+    );
+    let darken = Vec4::new(
+        base.1.red / base.0.red.max(1e-3),
+        base.1.green / base.0.green.max(1e-3),
+        base.1.blue / base.0.blue.max(1e-3),
+        1.0,
+    )
+    .min(Vec4::ONE);
+    for (k, &r) in rank.iter().enumerate() {
+        let (shallow, deep) = if k == 0 {
+            (base.0.to_vec4(), base.1.to_vec4())
+        } else {
+            let name = &params.liquids[k - 1].name;
+            let shallow = style.liquid_color(k, name).to_linear().to_vec4();
+            let deep = (shallow * (0.5 + 0.5 * darken)).with_w(base.1.alpha);
+            (shallow, deep)
+        };
+        settings.shallows[r as usize] = shallow;
+        settings.deeps[r as usize] = deep;
+    }
+    settings.options.y = 1.0;
 }
 
 impl PartialEq for LiquidUniform {
@@ -540,6 +640,8 @@ impl PartialEq for LiquidUniform {
             self.foam,
             self.shape,
             self.options,
+            self.shallows,
+            self.deeps,
         ) == (
             other.shallow,
             other.deep,
@@ -547,6 +649,8 @@ impl PartialEq for LiquidUniform {
             other.foam,
             other.shape,
             other.options,
+            other.shallows,
+            other.deeps,
         )
     }
 }

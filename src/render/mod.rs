@@ -8,7 +8,7 @@ mod liquid;
 mod solids;
 mod view;
 
-use crate::fluid::{Density, FluidParticle, Pressure, SphParams};
+use crate::fluid::{Density, FluidMaterial, FluidParticle, Pressure, SphParams};
 use crate::particle::{Position, Velocity};
 use crate::schedule::{ParticleSchedule, ParticleSystems};
 use bevy::asset::RenderAssetUsages;
@@ -387,6 +387,7 @@ type SpriteData = (
     &'static mut Transform,
     &'static mut Sprite,
     &'static mut Visibility,
+    Option<&'static FluidMaterial>,
 );
 
 /// Interpolated transforms, colours and sizes, in parallel.
@@ -394,6 +395,7 @@ fn update_sprites(
     view: Res<ParticleView>,
     texture: Option<Res<ParticleTexture>>,
     params: Res<SphParams>,
+    style: Res<LiquidStyle>,
     fixed: Res<Time<Fixed>>,
     mut table: Local<Option<(ColorMap, ColorTable)>>,
     mut particles: Query<SpriteData, With<FluidParticle>>,
@@ -423,6 +425,17 @@ fn update_sprites(
     let size = Some(Vec2::splat(view.sprite_scale * params.particle_spacing));
     let view = &*view;
     let texture = texture.as_deref().map(|t| &t.0);
+    // Each liquid besides the base one in its liquid view's colour.
+    let liquid_colors: Vec<Color> = (params.liquids.iter().enumerate())
+        .map(|(k, liquid)| style.liquid_color(k + 1, &liquid.name))
+        .collect();
+    let solid = |material: Option<&FluidMaterial>| {
+        let k = material.map_or(0, |m| m.0 as usize);
+        k.checked_sub(1)
+            .and_then(|i| liquid_colors.get(i))
+            .copied()
+            .unwrap_or(view.solid_color)
+    };
     particles.par_iter_mut().for_each(
         |(
             position,
@@ -433,6 +446,7 @@ fn update_sprites(
             mut transform,
             mut sprite,
             mut visibility,
+            material,
         )| {
             visibility.set_if_neq(shown);
             let at = previous.0.lerp(position.0, alpha).extend(0.0);
@@ -440,7 +454,7 @@ fn update_sprites(
                 transform.translation = at;
             }
             let color = match view.mode {
-                RenderMode::Solid => view.solid_color,
+                RenderMode::Solid => solid(material),
                 mode => Color::LinearRgba(
                     table.map(shown_value(mode, velocity, density, pressure), view.range),
                 ),

@@ -4,7 +4,7 @@
 
 use crate::common::{create_app, run, spawn, states};
 use bevy::prelude::*;
-use bevy_sph2d::fluid::{FluidParticle, SphParams, Tank};
+use bevy_sph2d::fluid::{FluidMaterial, FluidParticle, Liquid, Position, SphParams, Tank};
 use bevy_sph2d::gameplay::{FluidBlock, SnapshotError, load_fluid, save_fluid};
 
 fn params(base: SphParams) -> SphParams {
@@ -22,9 +22,37 @@ fn count(app: &mut App) -> usize {
         .count()
 }
 
+/// Makes the particles right of `x` (m) the first of the params' liquids.
+fn second_liquid_right_of(app: &mut App, x: f32) {
+    let world = app.world_mut();
+    let right: Vec<Entity> = world
+        .query_filtered::<(Entity, &Position), With<FluidParticle>>()
+        .iter(world)
+        .filter(|(_, p)| p.0.x > x)
+        .map(|(e, _)| e)
+        .collect();
+    for entity in right {
+        world.entity_mut(entity).insert(FluidMaterial(1));
+    }
+}
+
+/// How many particles are of the second liquid.
+fn second_liquid(app: &mut App) -> usize {
+    let world = app.world_mut();
+    world
+        .query::<&FluidMaterial>()
+        .iter(world)
+        .filter(|m| m.0 == 1)
+        .count()
+}
+
 fn round_trip(base: SphParams) {
+    let two_liquids = !base.liquids.is_empty();
     let mut original = create_app(params(base.clone()));
     spawn(&mut original, FluidBlock::dam_break(0.15, 0.3).with_seed(4));
+    if two_liquids {
+        second_liquid_right_of(&mut original, 0.075);
+    }
     run(&mut original, 30);
     let text = save_fluid(original.world_mut()).expect("saved");
     run(&mut original, 30);
@@ -36,6 +64,8 @@ fn round_trip(base: SphParams) {
     let loaded = load_fluid(restored.world_mut(), &text).expect("loaded");
     assert_eq!(loaded, expected.len());
     assert_eq!(*restored.world().resource::<SphParams>(), params(base));
+    assert_eq!(second_liquid(&mut restored), second_liquid(&mut original));
+    assert_eq!(second_liquid(&mut restored) > 0, two_liquids);
     run(&mut restored, 30);
     let got = states(&mut restored);
     assert_eq!(got.len(), expected.len());
@@ -54,6 +84,16 @@ fn round_trip(base: SphParams) {
 #[test]
 fn a_restored_run_matches_the_original_bit_for_bit() {
     round_trip(SphParams::water());
+}
+
+/// Brine in the column's right half: the snapshot keeps each particle's liquid and the liquids
+/// of the parameters, and the restored run is the same bits.
+#[test]
+fn a_restored_run_of_two_liquids_matches_the_original_bit_for_bit() {
+    round_trip(SphParams {
+        liquids: vec![Liquid::brine()],
+        ..SphParams::water()
+    });
 }
 
 #[test]

@@ -10,7 +10,8 @@ use bevy::ecs::message::Messages;
 use bevy::ecs::system::SystemState;
 use bevy::prelude::*;
 use bevy_sph2d::fluid::{
-    ContactAngle, FluidParticle, Solid, SolidShape, SphParams, SphSolver, SphStats, Tank,
+    ContactAngle, FluidMaterial, FluidParticle, Liquid, Solid, SolidShape, SphParams, SphSolver,
+    SphStats, Tank,
 };
 use bevy_sph2d::gameplay::{
     EmitterRate, FluidBlock, FluidDrain, FluidEmitter, FluidEntered, FluidLeft, FluidQuery,
@@ -169,6 +170,59 @@ fn drain_removes_what_enters_and_counts_it() {
     assert_eq!(remaining + drain.removed as usize, ids.len());
     assert!((drain.removed_volume - drain.removed as f32 * SPACING * SPACING).abs() < 1e-6);
     assert_eq!(app.world().resource::<SphStats>().particles, remaining);
+}
+
+/// An emitter of oil pours onto a resting layer of water: every particle it pours is oil, the
+/// oil floats up to the surface, and sensors for each liquid over the surface rows and the
+/// bottom read oil on top and none at the floor, water at the floor.
+#[test]
+fn an_oil_emitter_pours_oil_that_floats_and_per_liquid_sensors_tell_them_apart() {
+    let mut app = create_app(SphParams {
+        liquids: vec![Liquid::new("oil", 700.0)],
+        ..params()
+    });
+    spawn(
+        &mut app,
+        FluidBlock::resting_layer(&Tank::new(1.0, 0.6), 0.2).with_seed(3),
+    );
+    let oil = FluidMaterial(1);
+    let emitter = app
+        .world_mut()
+        .spawn((
+            FluidEmitter::new(0.1, Vec2::new(0.0, -1.0), 0.5, EmitterRate::Volume(0.02))
+                .with_material(oil)
+                .with_budget(200),
+            Transform::from_xyz(0.5, 0.4, 0.0),
+        ))
+        .id();
+    let floor = FluidRegion::rect(Vec2::new(0.5, 0.03), Vec2::new(0.45, 0.03));
+    let sensors = [FluidMaterial(0), oil].map(|m| {
+        app.world_mut()
+            .spawn(FluidSensor::new(floor).for_material(m))
+            .id()
+    });
+    run(&mut app, (3.0 / TICK).round() as usize);
+    assert_eq!(
+        app.world().get::<FluidEmitter>(emitter).unwrap().emitted,
+        200
+    );
+    let world = app.world_mut();
+    let heights: Vec<f32> = world
+        .query::<(&bevy_sph2d::fluid::Position, &FluidMaterial)>()
+        .iter(world)
+        .filter(|(_, m)| **m == oil)
+        .map(|(p, _)| p.0.y)
+        .collect();
+    assert_eq!(heights.len(), 200, "every poured particle is oil");
+    let mean = heights.iter().sum::<f32>() / heights.len() as f32;
+    assert!(
+        mean > 0.18,
+        "the oil floats on the water: mean height {mean} m"
+    );
+    let reading = |app: &App, k: usize| app.world().get::<FluidSensor>(sensors[k]).unwrap().reading;
+    let (water, oil) = (reading(&app, 0), reading(&app, 1));
+    assert!(water.fill > 0.9, "water at the floor: {water:?}");
+    assert_eq!(oil.particles, 0, "no oil at the floor: {oil:?}");
 }
 
 #[test]

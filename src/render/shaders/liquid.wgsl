@@ -1,5 +1,5 @@
 // The liquid surface: turns the splatted field (r: particle field, 1 inside a fluid at rest;
-// g: field × speed; b: field × colour-map position) into a body with an anti-aliased edge where
+// g: field × speed; b: field × colour-map position; a: field × liquid rank) into a body with an anti-aliased edge where
 // the field crosses the threshold, a colour that deepens with the liquid above, a lighter rim
 // along the surface and foam where the flow is fast.
 
@@ -18,8 +18,11 @@ struct Liquid {
     foam: vec4<f32>,
     // x: threshold, y: rim width (px), z: foam speed (m/s), w: depth of the deep colour (uv)
     shape: vec4<f32>,
-    // x: 1 to colour the body through the colour map, 0 for the body colours
+    // x: 1 to colour the body through the colour map, 0 for the body colours; y: 1 to colour
+    // each liquid its own (a: field × the liquid's rank in rest density)
     options: vec4<f32>,
+    shallows: array<vec4<f32>, 8>,
+    deeps: array<vec4<f32>, 8>,
 }
 
 @group(#{MATERIAL_BIND_GROUP}) @binding(0) var<uniform> liquid: Liquid;
@@ -42,6 +45,10 @@ fn fragment(in: VertexOutput) -> @location(0) vec4<f32> {
     let gradient = max(length(vec2(dpdx(f.r), dpdy(f.r))), 1e-4);
     let distance = (f.r - threshold) / gradient;
     let coverage = clamp(distance + 0.5, 0.0, 1.0);
+    // The liquids' rank, averaged by the field, and its screen gradient (taken before any
+    // branch): the surface between two liquids is where it crosses the half between ranks.
+    let rank = f.a / max(f.r, 1e-4);
+    let rank_gradient = max(length(vec2(dpdx(rank), dpdy(rank))), 1e-4);
     if coverage <= 0.0 {
         return vec4(0.0);
     }
@@ -62,6 +69,14 @@ fn fragment(in: VertexOutput) -> @location(0) vec4<f32> {
 
     let weight = max(f.r, 1e-4);
     var body = mix(liquid.shallow.rgb, liquid.deep.rgb, depth);
+    if liquid.options.y > 0.5 {
+        let low = clamp(floor(rank), 0.0, 6.0);
+        let side = clamp((rank - low - 0.5) / rank_gradient + 0.5, 0.0, 1.0);
+        let i = u32(low);
+        let below = mix(liquid.shallows[i].rgb, liquid.deeps[i].rgb, depth);
+        let above = mix(liquid.shallows[i + 1u].rgb, liquid.deeps[i + 1u].rgb, depth);
+        body = mix(below, above, side);
+    }
     if liquid.options.x > 0.5 {
         let t = clamp(f.b / weight, 0.0, 1.0);
         let mapped = textureSampleLevel(color_map, color_map_sampler, vec2(t, 0.5), 0.0).rgb;
