@@ -15,14 +15,8 @@ mod demo;
 
 use bevy::prelude::*;
 use bevy_sph2d::fluid::{ContactAngle, Solid, SolidShape, SphParams, SphPlugin, Tank};
-use bevy_sph2d::gameplay::{
-    EmitterRate, FluidDrain, FluidEmitter, FluidRegion, ScenarioKind, SphScenario,
-};
-use bevy_sph2d::render::{ParticleCamera, ParticleDraw, ParticleView, RenderMode};
-use bevy_sph2d::{ParticlePlugins, ParticleUiPlugins};
-use demo::{
-    ScreenshotAt, headless_plugins, limit_catch_up, run_headless, take_screenshot, window_plugins,
-};
+use bevy_sph2d::gameplay::{EmitterRate, FluidDrain, FluidEmitter, FluidRegion};
+use demo::{ScreenshotAt, headless_plugins, liquid_window, run_headless};
 
 /// The box, m.
 const BOX: Vec2 = Vec2::new(0.09, 0.05);
@@ -72,30 +66,11 @@ fn main() {
     }
 }
 
-/// The example in a window, with sprites drawn as liquid, the mouse tools and the panel.
+/// The example in a window, drawn as liquid, with the mouse tools and the panel.
 fn window(shot: Option<ScreenshotAt>) {
-    let mut app = App::new();
-    if let Some(shot) = shot {
-        app.insert_resource(shot)
-            .add_systems(Update, take_screenshot);
-    }
-    app.add_plugins((
-        window_plugins("bevy_sph2d: droplets"),
-        ParticlePlugins::default().set(SphPlugin::default().with_params(droplet_params())),
-        ParticleUiPlugins,
-        DropletScene,
-    ))
-    .insert_resource(ClearColor(Color::srgb(0.04, 0.05, 0.07)))
-    // Reset clears the water and spawns no scenario.
-    .insert_resource(SphScenario::new(ScenarioKind::Empty, 0))
-    .insert_resource(ParticleView {
-        draw: ParticleDraw::Liquid,
-        mode: RenderMode::Solid,
-        ..default()
-    })
-    .add_systems(Startup, (spawn_camera, limit_catch_up))
-    .add_systems(Update, toggle_taps)
-    .run();
+    liquid_window("bevy_sph2d: droplets", droplet_params(), DropletScene, shot)
+        .add_systems(Update, toggle_taps)
+        .run();
 }
 
 /// Runs the scene for `seconds` of simulated time at 64 ticks a second, as fast as it goes.
@@ -159,10 +134,6 @@ fn spawn_scene(mut commands: Commands) {
         Vec2::new(BOX.x / 2.0, 0.002),
         Vec2::new(BOX.x / 2.0, 0.002),
     )));
-}
-
-fn spawn_camera(mut commands: Commands) {
-    commands.spawn(ParticleCamera::default());
 }
 
 /// `T` stops and restarts the taps.

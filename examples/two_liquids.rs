@@ -16,13 +16,9 @@ use bevy::prelude::*;
 use bevy_sph2d::fluid::{
     FluidMaterial, FluidParticle, Liquid, Position, SphParams, SphPlugin, Tank,
 };
-use bevy_sph2d::gameplay::{FluidBlock, ScenarioKind, SphScenario};
+use bevy_sph2d::gameplay::FluidBlock;
 use bevy_sph2d::interact::{PointerSettings, PointerTool};
-use bevy_sph2d::render::{ParticleCamera, ParticleDraw, ParticleView, RenderMode};
-use bevy_sph2d::{ParticlePlugins, ParticleUiPlugins};
-use demo::{
-    ScreenshotAt, headless_plugins, limit_catch_up, run_headless, take_screenshot, window_plugins,
-};
+use demo::{ScreenshotAt, headless_plugins, liquid_window, run_headless};
 
 /// The cup (the tank), m.
 const CUP: Tank = Tank::new(0.3, 0.25);
@@ -64,40 +60,22 @@ fn main() {
 
 /// The example in a window: the liquid view, the mouse tools (drag to stir) and the panel.
 fn window(shot: Option<ScreenshotAt>) {
-    let mut app = App::new();
-    if let Some(shot) = shot {
-        app.insert_resource(shot)
-            .add_systems(Update, take_screenshot);
-    }
-    app.add_plugins((
-        window_plugins("bevy_sph2d: two liquids"),
-        ParticlePlugins::default().set(SphPlugin::default().with_params(cup_params())),
-        ParticleUiPlugins,
-        CupScene,
-    ))
-    .insert_resource(ClearColor(Color::srgb(0.04, 0.05, 0.07)))
-    .insert_resource(ParticleView {
-        draw: ParticleDraw::Liquid,
-        mode: RenderMode::Solid,
-        ..default()
-    })
-    .insert_resource(PointerSettings {
-        tool: PointerTool::Drag,
-        radius: 0.05,
-        ..default()
-    })
-    .add_systems(Startup, (spawn_camera, limit_catch_up))
-    .run();
+    liquid_window("bevy_sph2d: two liquids", cup_params(), CupScene, shot)
+        .insert_resource(PointerSettings {
+            tool: PointerTool::Drag,
+            radius: 0.05,
+            ..default()
+        })
+        .run();
 }
 
 /// The cup's layers, filled again whenever it is empty (at the start and after Reset, which
-/// clears the water: the scenario is empty).
+/// clears the water).
 struct CupScene;
 
 impl Plugin for CupScene {
     fn build(&self, app: &mut App) {
-        app.insert_resource(SphScenario::new(ScenarioKind::Empty, 0))
-            .add_systems(Update, fill_cup);
+        app.add_systems(Update, fill_cup);
     }
 }
 
@@ -118,8 +96,4 @@ fn fill_cup(fluid: Query<(), With<FluidParticle>>, params: Res<SphParams>, mut c
         );
         floor += depth;
     }
-}
-
-fn spawn_camera(mut commands: Commands) {
-    commands.spawn(ParticleCamera::default());
 }

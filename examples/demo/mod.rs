@@ -197,3 +197,39 @@ pub fn take_screenshot(
         None => {}
     }
 }
+
+/// A scene's app in a window, drawn as liquid in the liquid's own colours on a dark
+/// background, with the mouse tools and the panel: `scene` adds the scene, `params` the fluid,
+/// `shot` a screenshot to take and quit (`--screenshot`). Reset clears the fluid (an empty
+/// scenario): the scene refills it, if it wants.
+pub fn liquid_window(
+    title: &str,
+    params: SphParams,
+    scene: impl Plugin,
+    shot: Option<ScreenshotAt>,
+) -> App {
+    let mut app = App::new();
+    if let Some(shot) = shot {
+        app.insert_resource(shot)
+            .add_systems(Update, take_screenshot);
+    }
+    app.add_plugins((
+        window_plugins(title),
+        ParticlePlugins::default().set(SphPlugin::default().with_params(params)),
+        ParticleUiPlugins,
+        scene,
+    ))
+    .insert_resource(ClearColor(Color::srgb(0.04, 0.05, 0.07)))
+    .insert_resource(SphScenario::new(ScenarioKind::Empty, 0))
+    .insert_resource(ParticleView {
+        draw: ParticleDraw::Liquid,
+        mode: RenderMode::Solid,
+        ..default()
+    })
+    .add_systems(Startup, (spawn_particle_camera, limit_catch_up));
+    app
+}
+
+fn spawn_particle_camera(mut commands: Commands) {
+    commands.spawn(ParticleCamera::default());
+}
