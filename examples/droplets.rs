@@ -14,9 +14,9 @@
 mod demo;
 
 use bevy::prelude::*;
-use bevy_sph2d::fluid::{ContactAngle, Solid, SolidShape, SphParams, SphPlugin, Tank};
+use bevy_sph2d::fluid::{ContactAngle, Solid, SolidShape, SphParams, Tank};
 use bevy_sph2d::gameplay::{EmitterRate, FluidDrain, FluidEmitter, FluidRegion};
-use demo::{ScreenshotAt, headless_plugins, liquid_window, run_headless};
+use demo::{ScreenshotAt, headless_seconds, liquid_window, run_scene_headless};
 
 /// The box, m.
 const BOX: Vec2 = Vec2::new(0.09, 0.05);
@@ -57,11 +57,8 @@ fn droplet_params() -> SphParams {
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
-    match args.iter().position(|a| a == "--headless") {
-        Some(i) => {
-            let seconds = args.get(i + 1).and_then(|s| s.parse().ok()).unwrap_or(5.0);
-            headless(seconds);
-        }
+    match headless_seconds(&args) {
+        Some(seconds) => run_scene_headless("droplets", droplet_params(), DropletScene, seconds),
         None => window(ScreenshotAt::from_args(&args, "droplets.png", 8.0)),
     }
 }
@@ -71,17 +68,6 @@ fn window(shot: Option<ScreenshotAt>) {
     liquid_window("bevy_sph2d: droplets", droplet_params(), DropletScene, shot)
         .add_systems(Update, toggle_taps)
         .run();
-}
-
-/// Runs the scene for `seconds` of simulated time at 64 ticks a second, as fast as it goes.
-fn headless(seconds: f64) {
-    let mut app = App::new();
-    app.add_plugins((
-        headless_plugins(),
-        SphPlugin::default().with_params(droplet_params()),
-        DropletScene,
-    ));
-    run_headless("droplets", app, seconds);
 }
 
 /// The scene: the plates, a tap over each and the drain.

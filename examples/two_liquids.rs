@@ -13,12 +13,10 @@
 mod demo;
 
 use bevy::prelude::*;
-use bevy_sph2d::fluid::{
-    FluidMaterial, FluidParticle, Liquid, Position, SphParams, SphPlugin, Tank,
-};
+use bevy_sph2d::fluid::{FluidMaterial, FluidParticle, Liquid, Position, SphParams, Tank};
 use bevy_sph2d::gameplay::FluidBlock;
 use bevy_sph2d::interact::{PointerSettings, PointerTool};
-use demo::{ScreenshotAt, headless_plugins, liquid_window, run_headless};
+use demo::{ScreenshotAt, headless_seconds, liquid_window, run_scene_headless};
 
 /// The cup (the tank), m.
 const CUP: Tank = Tank::new(0.3, 0.25);
@@ -43,17 +41,8 @@ fn cup_params() -> SphParams {
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
-    match args.iter().position(|a| a == "--headless") {
-        Some(i) => {
-            let seconds = args.get(i + 1).and_then(|s| s.parse().ok()).unwrap_or(5.0);
-            let mut app = App::new();
-            app.add_plugins((
-                headless_plugins(),
-                SphPlugin::default().with_params(cup_params()),
-                CupScene,
-            ));
-            run_headless("two_liquids", app, seconds);
-        }
+    match headless_seconds(&args) {
+        Some(seconds) => run_scene_headless("two_liquids", cup_params(), CupScene, seconds),
         None => window(ScreenshotAt::from_args(&args, "two_liquids.png", 4.0)),
     }
 }

@@ -233,3 +233,22 @@ pub fn liquid_window(
 fn spawn_particle_camera(mut commands: Commands) {
     commands.spawn(ParticleCamera::default());
 }
+
+/// The simulated seconds of `--headless [SECONDS]` in `args` (5 when none is given), if the
+/// flag is there.
+pub fn headless_seconds(args: &[String]) -> Option<f64> {
+    let i = args.iter().position(|a| a == "--headless")?;
+    Some(args.get(i + 1).and_then(|s| s.parse().ok()).unwrap_or(5.0))
+}
+
+/// `scene` on `params` without a window for `seconds` ([`run_headless`]), printing `name`'s
+/// speed.
+pub fn run_scene_headless(name: &str, params: SphParams, scene: impl Plugin, seconds: f64) {
+    let mut app = App::new();
+    app.add_plugins((
+        headless_plugins(),
+        SphPlugin::default().with_params(params),
+        scene,
+    ));
+    run_headless(name, app, seconds);
+}

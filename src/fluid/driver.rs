@@ -268,7 +268,7 @@ fn neighbors_stage(
 
 /// The rest density ratio of `material` (the base liquid's without one) from `ratios`, by
 /// material.
-fn density_ratio(ratios: &[f32], material: Option<&FluidMaterial>) -> f32 {
+pub(super) fn density_ratio(ratios: &[f32], material: Option<&FluidMaterial>) -> f32 {
     material
         .and_then(|m| ratios.get(m.0 as usize))
         .copied()

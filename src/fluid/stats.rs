@@ -20,10 +20,7 @@ pub(crate) fn update_stats(
         count += 1;
         max_speed_sq = max_speed_sq.max(velocity.length_squared());
         // Against the particle's own liquid's rest density.
-        let ratio = material
-            .and_then(|m| solver.density_ratios.get(m.0 as usize))
-            .copied()
-            .unwrap_or(1.0);
+        let ratio = super::driver::density_ratio(&solver.density_ratios, material);
         let error = (density.0 / (ratio * c.rest_density) - 1.0).max(0.0);
         max_error = max_error.max(error);
         sum_error += error as f64;
