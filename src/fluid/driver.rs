@@ -15,7 +15,7 @@ use super::components::{
     Acceleration, Density, FluidIndex, FluidParticle, Position, Pressure, Stiffness, Velocity,
 };
 use super::liquids::FluidMaterial;
-use super::resources::{SphSolver, SphStats};
+use super::resources::{LiquidConstants, SphSolver, SphStats};
 use crate::schedule::{SphSubstep, SphSubstepSystems};
 use crate::sim::parallel::{PARALLEL_SLOTS, Parallel, Rayon, Sequential};
 use crate::sim::step::{Particles, Stage, StepLength};
@@ -77,10 +77,10 @@ impl SphSolver {
         self.generation = self.generation.wrapping_add(1).max(1);
         self.particles.resize(items.len());
         self.particles.rest_ratio.clear();
+        self.particles.viscosity.clear();
         for (i, item) in items.enumerate() {
             item.put(&mut self.particles, i);
-            let ratio = density_ratio(&self.density_ratios, item.material);
-            note_ratio(&mut self.particles.rest_ratio, i, ratio);
+            note_liquid(&mut self.particles, &self.liquids, i, item.material);
         }
     }
 }
@@ -245,12 +245,12 @@ fn neighbors_stage(
     // are theirs, and the stages below write every one of them back.
     let p = &mut solver.particles;
     p.rest_ratio.clear();
+    p.viscosity.clear();
     for (i, (slot, data)) in fluid.iter().enumerate() {
         p.position[i] = data.position.0;
         p.velocity[i] = data.velocity.0;
         p.stiffness[i] = data.stiffness.0;
-        let ratio = density_ratio(&solver.density_ratios, data.material);
-        note_ratio(&mut p.rest_ratio, i, ratio);
+        note_liquid(p, &solver.liquids, i, data.material);
         same &= slot.index as usize == i && slot.generation == generation;
     }
     if !same {
@@ -266,24 +266,46 @@ fn neighbors_stage(
     solver.run_stage(Stage::Neighbors);
 }
 
-/// The rest density ratio of `material` (the base liquid's without one) from `ratios`, by
-/// material.
-pub(super) fn density_ratio(ratios: &[f32], material: Option<&FluidMaterial>) -> f32 {
+/// What the solver needs of `material`'s liquid (the base liquid's without one), from
+/// `liquids`, by material.
+pub(super) fn liquid_of(
+    liquids: &[LiquidConstants],
+    material: Option<&FluidMaterial>,
+) -> LiquidConstants {
+    let base = liquids[0];
     material
-        .and_then(|m| ratios.get(m.0 as usize))
+        .and_then(|m| liquids.get(m.0 as usize))
         .copied()
-        .unwrap_or(1.0)
+        .unwrap_or(base)
 }
 
-/// Notes particle `i`'s rest density `ratio` in `ratios` (see
-/// [`Particles::rest_ratio`]), which stays empty while every particle so far is the base
-/// liquid.
-fn note_ratio(ratios: &mut Vec<f32>, i: usize, ratio: f32) {
-    if ratios.is_empty() && ratio != 1.0 {
-        ratios.resize(i, 1.0);
+/// Notes particle `i`'s liquid (of `material`) in `particles`' rest density ratios and
+/// viscosities, each of which stays empty while every particle so far has the base liquid's
+/// (see [`Particles::rest_ratio`]).
+fn note_liquid(
+    particles: &mut Particles,
+    liquids: &[LiquidConstants],
+    i: usize,
+    material: Option<&FluidMaterial>,
+) {
+    let (base, liquid) = (liquids[0], liquid_of(liquids, material));
+    note(&mut particles.rest_ratio, i, liquid.ratio, base.ratio);
+    note(
+        &mut particles.viscosity,
+        i,
+        liquid.viscosity,
+        base.viscosity,
+    );
+}
+
+/// Pushes particle `i`'s `value` onto `values`, which stays empty while every value so far is
+/// `base`.
+fn note(values: &mut Vec<f32>, i: usize, value: f32, base: f32) {
+    if values.is_empty() && value != base {
+        values.resize(i, base);
     }
-    if !ratios.is_empty() {
-        ratios.push(ratio);
+    if !values.is_empty() {
+        values.push(value);
     }
 }
 

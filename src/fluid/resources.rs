@@ -26,9 +26,33 @@ pub struct SphSolver {
     pub(crate) removed_escaped: u64,
     /// The solids' entities, in the order of the step's solids.
     pub(crate) solids: super::solids::SolidIndex,
-    /// Each [`FluidMaterial`](super::FluidMaterial)'s rest density over the base liquid's, by
-    /// material (the base liquid's one first).
-    pub(crate) density_ratios: Vec<f32>,
+    /// What the step needs of each [`FluidMaterial`](super::FluidMaterial)'s liquid, by
+    /// material (the base liquid first).
+    pub(crate) liquids: Vec<LiquidConstants>,
+}
+
+/// What the step needs of one liquid.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct LiquidConstants {
+    /// Its rest density over the base liquid's.
+    pub ratio: f32,
+    /// Its kinematic viscosity, m²/s.
+    pub viscosity: f32,
+}
+
+impl SphParams {
+    /// The base liquid's constants, then each of [`liquids`](Self::liquids)'.
+    fn liquid_constants(&self) -> impl Iterator<Item = LiquidConstants> + '_ {
+        let base = LiquidConstants {
+            ratio: 1.0,
+            viscosity: self.kinematic_viscosity,
+        };
+        let others = self.liquids.iter().map(|liquid| LiquidConstants {
+            ratio: liquid.rest_density / self.rest_density,
+            viscosity: liquid.kinematic_viscosity,
+        });
+        std::iter::once(base).chain(others)
+    }
 }
 
 impl Default for SphSolver {
@@ -51,7 +75,10 @@ impl SphSolver {
             removed_non_finite: 0,
             solids: Default::default(),
             removed_escaped: 0,
-            density_ratios: vec![1.0],
+            liquids: vec![LiquidConstants {
+                ratio: 1.0,
+                viscosity: constants.kinematic_viscosity,
+            }],
         }
     }
 
@@ -133,12 +160,8 @@ impl crate::params::Params for SphParams {
             || old.support != constants.support
             || old.wall_layers != constants.wall_layers;
         solver.step.set_constants(constants);
-        solver.density_ratios.clear();
-        solver.density_ratios.push(1.0);
-        let liquids = self.liquids.iter();
-        solver
-            .density_ratios
-            .extend(liquids.map(|liquid| liquid.rest_density / self.rest_density));
+        solver.liquids.clear();
+        solver.liquids.extend(self.liquid_constants());
         if geometry_changed {
             solver.walls_dirty = true;
         }

@@ -20,7 +20,7 @@ pub(crate) fn update_stats(
         count += 1;
         max_speed_sq = max_speed_sq.max(velocity.length_squared());
         // Against the particle's own liquid's rest density.
-        let ratio = super::driver::density_ratio(&solver.density_ratios, material);
+        let ratio = super::driver::liquid_of(&solver.liquids, material).ratio;
         let error = (density.0 / (ratio * c.rest_density) - 1.0).max(0.0);
         max_error = max_error.max(error);
         sum_error += error as f64;

@@ -469,8 +469,8 @@ fn fluid_material(ui: &mut egui::Ui, p: &mut SphParams) {
     }
 }
 
-/// The liquids besides the base one: each one's rest density, and buttons that add oil or brine
-/// and remove the last (removing one from the middle would change the others' materials).
+/// The liquids besides the base one: each one's rest density and viscosity, and buttons that
+/// add oil or brine and remove the last (removing one from the middle would change the others' materials).
 fn fluid_liquids(ui: &mut egui::Ui, p: &mut SphParams, style: &LiquidStyle) {
     ui.label(format!(
         "liquids: base ({} kg/m³){}",
@@ -492,6 +492,10 @@ fn fluid_liquids(ui: &mut egui::Ui, p: &mut SphParams, style: &LiquidStyle) {
             ui.colored_label(swatch, format!("{} {}", k + 1, liquid.name));
             param_slider(ui, &mut liquid.rest_density, low..=high, "", "kg/m³", false);
         });
+        let row = &SphParams::KINEMATIC_VISCOSITY;
+        let (least, most) = row.slider;
+        let nu = &mut liquid.kinematic_viscosity;
+        param_slider(ui, nu, least..=most, "   ν", row.unit, row.logarithmic);
     }
     ui.horizontal(|ui| {
         if ui.button("+ Oil").clicked() {

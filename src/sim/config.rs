@@ -70,6 +70,15 @@ pub struct SphConstants {
     pub surface: SurfaceCalibration,
 }
 
+impl SphConstants {
+    /// These constants with the kinematic viscosity raised to `largest` (m²/s) where that is
+    /// larger: what the step limits read when the liquids have viscosities of their own.
+    pub fn with_largest_viscosity(mut self, largest: f32) -> Self {
+        self.kinematic_viscosity = self.kinematic_viscosity.max(largest);
+        self
+    }
+}
+
 /// How the colour gradient of the rest lattice reads at a flat free surface.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct SurfaceCalibration {

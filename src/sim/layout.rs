@@ -231,16 +231,23 @@ pub(crate) struct FluidSnapshot {
     /// Rest density over [`SphConstants::rest_density`] per sorted slot (a particle's mass over
     /// the base liquid's), padded with ones like `kinematics`.
     pub rest_ratio: Vec<f32>,
+    /// Kinematic viscosity per sorted slot, m²/s, padded with zeros like `kinematics`; empty
+    /// when every particle has [`SphConstants::kinematic_viscosity`].
+    pub viscosity: Vec<f32>,
+    /// The largest of [`viscosity`](Self::viscosity) and the constants' kinematic viscosity,
+    /// m²/s: the viscous step limit's.
+    pub max_viscosity: f32,
 }
 
 impl FluidSnapshot {
-    /// Rebuilds the grid over `positions` (input order) and copies positions and velocities into
-    /// sorted order, in parallel chunks on `parallel`; densities are left at rest until
-    /// [`set_pressure`](Self::set_pressure).
+    /// Rebuilds the grid over `positions` (input order) and copies positions, velocities, rest
+    /// density ratios and viscosities (each empty for the base liquid's everywhere: see
+    /// [`Particles`](super::step::Particles)) into sorted order, in parallel chunks on
+    /// `parallel`; densities are left at rest until [`set_pressure`](Self::set_pressure).
     pub fn rebuild(
         &mut self,
         c: &SphConstants,
-        (positions, velocities, ratios): (&[Vec2], &[Vec2], &[f32]),
+        (positions, velocities, ratios, viscosities): (&[Vec2], &[Vec2], &[f32], &[f32]),
         parallel: &impl Parallel,
     ) {
         debug_assert_eq!(positions.len(), velocities.len());
@@ -297,6 +304,13 @@ impl FluidSnapshot {
         } else {
             let sorted = order.iter().map(|&i| ratios[i as usize]);
             self.rest_ratio.extend(sorted.chain([1.0; LANES]));
+        }
+        self.viscosity.clear();
+        self.max_viscosity = c.kinematic_viscosity;
+        if !viscosities.is_empty() {
+            let sorted = order.iter().map(|&i| viscosities[i as usize]);
+            self.viscosity.extend(sorted.chain([0.0; LANES]));
+            self.max_viscosity = (self.viscosity.iter()).fold(self.max_viscosity, |m, &v| m.max(v));
         }
     }
 

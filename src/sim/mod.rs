@@ -10,7 +10,8 @@
 //! - [`boundary`], [`solid`], [`region`]: the tank and static shapes, moving solids, and
 //!   regions for drains and sensors.
 //! - [`density`], [`integrate`]: summation density and the particle integrator.
-//! - [`wcsph`], [`dfsph`]: the two pressure solvers.
+//! - [`wcsph`], [`dfsph`]: the two pressure solvers; [`viscosity`]: their laminar pair term
+//!   between liquids of their own viscosities.
 //! - [`step`]: the one order of a sub-step, which both drivers call.
 //! - [`clock`], [`parallel`], [`profile`]: the sub-step clock, the slot passes over threads
 //!   and where a sub-step's time goes.
@@ -34,5 +35,6 @@ pub mod simd;
 pub mod solid;
 pub mod step;
 pub mod tension;
+pub mod viscosity;
 pub mod wcsph;
 pub mod world;

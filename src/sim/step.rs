@@ -48,6 +48,9 @@ pub struct Particles {
     /// the base liquid); empty when every particle is the base liquid. When not empty it is as
     /// long as the other arrays.
     pub rest_ratio: Vec<f32>,
+    /// Each particle's kinematic viscosity (its liquid's), m²/s; empty when every particle has
+    /// [`SphConstants::kinematic_viscosity`]. When not empty it is as long as the other arrays.
+    pub viscosity: Vec<f32>,
 }
 
 impl Particles {
@@ -62,6 +65,7 @@ impl Particles {
             pressure: vec![0.0; n],
             stiffness: vec![Vec2::ZERO; n],
             rest_ratio: Vec::new(),
+            viscosity: Vec::new(),
         }
     }
 
@@ -90,10 +94,12 @@ impl Particles {
         self.pressure.clear();
         self.stiffness.clear();
         self.rest_ratio.clear();
+        self.viscosity.clear();
     }
 
     /// Sets the number of particles to `n`, keeping the first ones; new ones at rest at the
-    /// origin, for a driver to overwrite.
+    /// origin (and, where the lists are not empty, of rest density ratio one and no viscosity),
+    /// for a driver to overwrite.
     pub fn resize(&mut self, n: usize) {
         self.position.resize(n, Vec2::ZERO);
         self.velocity.resize(n, Vec2::ZERO);
@@ -104,18 +110,8 @@ impl Particles {
         if !self.rest_ratio.is_empty() {
             self.rest_ratio.resize(n, 1.0);
         }
-    }
-
-    /// Appends one particle.
-    pub fn push(&mut self, position: Vec2, velocity: Vec2, stiffness: Vec2, rest_density: f32) {
-        self.position.push(position);
-        self.velocity.push(velocity);
-        self.acceleration.push(Vec2::ZERO);
-        self.density.push(rest_density);
-        self.pressure.push(0.0);
-        self.stiffness.push(stiffness);
-        if !self.rest_ratio.is_empty() {
-            self.rest_ratio.push(1.0);
+        if !self.viscosity.is_empty() {
+            self.viscosity.resize(n, 0.0);
         }
     }
 }
@@ -541,6 +537,7 @@ impl FluidStep {
                         &particles.position,
                         &particles.velocity,
                         &particles.rest_ratio,
+                        &particles.viscosity,
                     ),
                     parallel,
                 );

@@ -21,6 +21,7 @@ use super::kernels::RadialKernel;
 use super::layout::{FluidSnapshot, LANES, NeighborList, WallState, Walls};
 use super::parallel::{Parallel, for_each_slot};
 use super::step::{ForcesWrite, Particles, PressureStages, Shared, for_each_particle};
+use super::viscosity::Laminar;
 use bevy::math::{Vec2, Vec4};
 
 /// The weakly compressible solver's own state: each particle's fluid neighbours by sorted slot,
@@ -72,11 +73,7 @@ impl PressureStages for Wcsph {
         let (snapshot, walls, lists) = (&s.snapshot, &s.walls, &self.lists);
         with_kernels!(c.kernel, c.support, |_w, g| {
             for_each_slot(&mut s.accelerations, parallel, |slot, a| {
-                let [x, y, vx, vy] = snapshot.kinematics[slot];
-                let rho = snapshot.pressure.get(slot).0;
-                let p = liquid_pressure(&c, rho, snapshot.rest_ratio[slot]);
-                let (x, v) = (Vec2::new(x, y), Vec2::new(vx, vy));
-                *a = acceleration_at(&g, &c, x, v, rho, p, &lists[slot], snapshot, walls);
+                *a = acceleration_at(&g, &c, slot, &lists[slot], snapshot, walls);
                 0.0
             });
         });
@@ -91,7 +88,8 @@ impl PressureStages for Wcsph {
     }
 
     fn step_limit(&self, s: &Shared, max_acceleration: f32) -> f32 {
-        stable_time_step(&s.constants, s.snapshot.max_speed, max_acceleration)
+        let limits = (s.constants).with_largest_viscosity(s.snapshot.max_viscosity);
+        stable_time_step(&limits, s.snapshot.max_speed, max_acceleration)
     }
 
     /// Symplectic Euler with the particles' accelerations, walls and solids.
@@ -120,9 +118,9 @@ impl PressureStages for Wcsph {
         let centers: Vec<Vec2> = walls.solids.iter().map(|b| b.world_center()).collect();
         let mut sums = vec![(Vec2::ZERO, 0.0f32); centers.len()];
         let eta_sq = 0.01 * c.smoothing_length * c.smoothing_length;
-        let laminar = 4.0 * c.kinematic_viscosity;
         with_kernels!(c.kernel, c.support, |_w, g| {
             walls.for_each_solid_pair(&c, snapshot, |k, x, wall, i, r, r2| {
+                let laminar = Laminar::at(snapshot, c.kinematic_viscosity, i).own();
                 let [_, _, vx, vy] = snapshot.kinematics[i];
                 let (rho_i, term_i) = snapshot.pressure.get(i);
                 let d = &walls.data;
@@ -207,8 +205,9 @@ pub fn wall_state_at<K: RadialKernel>(
     }
 }
 
-/// Acceleration (m/s²) of a particle at `x` with velocity `v`, density `rho` and pressure `p`:
-/// pressure, artificial and laminar viscosity from fluid and wall neighbours, plus gravity.
+/// Acceleration (m/s²) of the particle at sorted `slot` (its density summed into the snapshot
+/// this sub-step): pressure, artificial and laminar viscosity from fluid and wall neighbours,
+/// plus gravity.
 ///
 /// Fluid neighbours come from `list` (filled by
 /// [`density_and_neighbors_at`](super::density::density_and_neighbors_at) this sub-step), or
@@ -217,22 +216,23 @@ pub fn wall_state_at<K: RadialKernel>(
 /// evaluated four at a time and those outside the support masked, so there is no branch per
 /// neighbour.
 #[inline]
-#[expect(
-    clippy::too_many_arguments,
-    reason = "the particle's own state, spelled out"
-)]
 pub fn acceleration_at<K: RadialKernel>(
     kernel: &K,
     c: &SphConstants,
-    x: Vec2,
-    v: Vec2,
-    rho: f32,
-    p: f32,
+    slot: usize,
     list: &NeighborList,
     fluid: &FluidSnapshot,
     walls: &Walls,
 ) -> Vec2 {
+    let [x, y, vx, vy] = fluid.kinematics[slot];
+    let (x, v, rho) = (
+        Vec2::new(x, y),
+        Vec2::new(vx, vy),
+        fluid.pressure.get(slot).0,
+    );
+    let p = liquid_pressure(c, rho, fluid.rest_ratio[slot]);
     let pair = PairTerms::new(c, v, rho, p);
+    let laminar = Laminar::at(fluid, c.kinematic_viscosity, slot);
     let mut sum = (Vec4::ZERO, Vec4::ZERO);
     match list.padded_slots() {
         Some(slots) => {
@@ -241,25 +241,28 @@ pub fn acceleration_at<K: RadialKernel>(
                 let ([px, py], neighbor) = fluid.gather(lanes);
                 let (dx, dy) = (px - Vec4::splat(x.x), py - Vec4::splat(x.y));
                 let mass = Vec4::from_array(lanes.map(|j| fluid.rest_ratio[j]));
-                pair.accumulate(kernel, (dx, dy, mass), neighbor, &mut sum);
+                let nu = laminar.lanes(|nu| Vec4::from_array(lanes.map(|j| nu[j])));
+                pair.accumulate(kernel, (dx, dy, mass, nu), neighbor, &mut sum);
             }
         }
         None => fluid.points.for_each_batch(x, |start, dx, dy, _| {
             let (_, neighbor) = fluid.gather([start, start + 1, start + 2, start + 3]);
             let mass = Vec4::from_slice(&fluid.rest_ratio[start..start + LANES]);
-            pair.accumulate(kernel, (dx, dy, mass), neighbor, &mut sum);
+            let nu = laminar.lanes(|nu| Vec4::from_slice(&nu[start..start + LANES]));
+            pair.accumulate(kernel, (dx, dy, mass, nu), neighbor, &mut sum);
         }),
     }
     // Artificial viscosity is a numerical damping of the fluid's own noise; against a wall it
     // would act as friction (measured: a dam-break front slowing by a fifth, where experiments
-    // show none), so walls only take the physical laminar term.
+    // show none), so walls only take the physical laminar term, with the particle's own `ν`.
     let wall_pair = PairTerms {
         artificial: Vec4::ZERO,
         ..pair
     };
+    let own = Vec4::splat(laminar.own());
     walls.points.for_each_batch(x, |start, dx, dy, _| {
         let lanes = walls.data.lanes(start);
-        wall_pair.accumulate(kernel, (dx, dy, Vec4::ONE), lanes, &mut sum);
+        wall_pair.accumulate(kernel, (dx, dy, Vec4::ONE, own), lanes, &mut sum);
     });
     c.mass * Vec2::new(sum.0.element_sum(), sum.1.element_sum()) + c.gravity
 }
@@ -276,8 +279,6 @@ struct PairTerms {
     /// `2 α c₀ h`: Monaghan's `Π = −α c₀ h μ / ρ̄` with `μ = (v·r)/(r²+η²)` for approaching
     /// pairs and `ρ̄ = (ρᵢ+ρⱼ)/2`.
     artificial: Vec4,
-    /// `4 ν`: Lo & Shao's laminar term `4ν (r·∇W)/((ρᵢ+ρⱼ)(r²+η²)) vᵢⱼ`.
-    laminar: Vec4,
 }
 
 impl PairTerms {
@@ -293,18 +294,18 @@ impl PairTerms {
             vx: Vec4::splat(v.x),
             vy: Vec4::splat(v.y),
             artificial: Vec4::splat(2.0 * c.artificial_viscosity * c.speed_of_sound * h),
-            laminar: Vec4::splat(4.0 * c.kinematic_viscosity),
         }
     }
 
     /// Adds, per lane, the pressure and viscosity terms (per unit mass) of four neighbours at
-    /// offsets `(dx, dy)` with `[vx, vy, density, pressure term]` and masses `mass` (over the
-    /// base liquid's); lanes outside the support (or at the particle itself) add nothing.
+    /// offsets `(dx, dy)` with `[vx, vy, density, pressure term]`, masses `mass` (over the
+    /// base liquid's) and the pairs' `4ν` (Lo & Shao's laminar term `4ν (r·∇W)/((ρᵢ+ρⱼ)(r²+η²))
+    /// vᵢⱼ`); lanes outside the support (or at the particle itself) add nothing.
     #[inline(always)]
     fn accumulate<K: RadialKernel>(
         &self,
         kernel: &K,
-        (dx, dy, mass): (Vec4, Vec4, Vec4),
+        (dx, dy, mass, laminar): (Vec4, Vec4, Vec4, Vec4),
         [vx_j, vy_j, rho_j, term_j]: [Vec4; 4],
         sum: &mut (Vec4, Vec4),
     ) {
@@ -317,7 +318,7 @@ impl PairTerms {
         let inv = Vec4::ONE / ((r2 + self.eta_sq) * (self.rho + rho_j));
         let approach = (vx * rx + vy * ry).min(Vec4::ZERO);
         let scalar = self.own_term + term_j - self.artificial * approach * inv;
-        let viscous = self.laminar * r2 * inv;
+        let viscous = laminar * r2 * inv;
         let slope = slope * mass;
         let fx = slope * (viscous * vx - scalar * rx);
         let fy = slope * (viscous * vy - scalar * ry);

@@ -70,6 +70,7 @@ use super::density::{max_length, with_kernels};
 use super::kernels::RadialKernel;
 use super::layout::{FluidSnapshot, Walls};
 use super::parallel::Parallel;
+use super::viscosity::Laminar;
 use crate::sim::simd::Simd;
 use bevy::math::{Vec2, Vec4};
 use rows::{BLOCK, Rows};
@@ -385,7 +386,7 @@ impl Dfsph {
         let eta_sq = Vec4::splat(0.01 * h * h);
         // m ∇W = ρ₀ g / s.
         let to_mass_gradient = c.rest_density / c.gradient_scale;
-        let laminar = 4.0 * c.kinematic_viscosity;
+        let laminar = Laminar::at(fluid, c.kinematic_viscosity, slot);
         let artificial = 2.0 * c.artificial_viscosity * c.speed_of_sound * h;
         let (rest, rho_i4) = (Vec4::splat(c.rest_density), Vec4::splat(rho_i));
         // Four neighbours a block, on lanes (the padding, the particle itself at zero
@@ -418,6 +419,7 @@ impl Dfsph {
             let rho_j = lanes(slots, |j| self.state[j].density) * rest * mass_j;
             let inv = Vec4::ONE / ((r2 + eta_sq) * (rho_i4 + rho_j));
             let approach = (vx * rx + vy * ry).min(Vec4::ZERO);
+            let laminar = laminar.lanes(|nu| lanes(slots, |j| nu[j]));
             let viscous = laminar * inv * (rx * gx + ry * gy);
             let shock = artificial * approach * inv;
             ax += viscous * vx + shock * gx;
@@ -425,7 +427,7 @@ impl Dfsph {
         }
         let sum = |v: Vec4| (v.x + v.z) + (v.y + v.w);
         let a = Vec2::new(sum(ax), sum(ay));
-        let wall = laminar * c.rest_density / (rho_i + c.rest_density);
+        let wall = laminar.own() * c.rest_density / (rho_i + c.rest_density);
         let wall = wall * (s.wall_viscosity * vi - s.wall_drag);
         // The walls mirror a particle's pressure with the hydrostatic head (Adami et al. 2012):
         // the solves push with the particle's own stiffness (`2κᵢ g_wall`), the head follows
@@ -629,7 +631,7 @@ mod tests {
         let mut fluid = FluidSnapshot::default();
         fluid.rebuild(
             &c,
-            (&points, &vec![Vec2::ZERO; points.len()], &[]),
+            (&points, &vec![Vec2::ZERO; points.len()], &[], &[]),
             &Sequential,
         );
         let mut dfsph = Dfsph::default();
@@ -665,7 +667,7 @@ mod tests {
         let mut fluid = FluidSnapshot::default();
         fluid.rebuild(
             &c,
-            (&points, &vec![Vec2::ZERO; points.len()], &[]),
+            (&points, &vec![Vec2::ZERO; points.len()], &[], &[]),
             &Sequential,
         );
         let mut walls = Walls::default();

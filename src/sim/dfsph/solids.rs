@@ -7,6 +7,7 @@ use crate::sim::config::SphConstants;
 use crate::sim::density::with_kernels;
 use crate::sim::kernels::RadialKernel;
 use crate::sim::layout::{FluidSnapshot, Walls};
+use crate::sim::viscosity::Laminar;
 use bevy::math::Vec2;
 
 /// One pair's terms: the wall gradient `g_ib` (1/m) and the friction weight (dimensionless).
@@ -48,10 +49,10 @@ impl Dfsph {
         }
         let mut sums = vec![(Vec2::ZERO, 0.0f32); walls.solids.len()];
         let centers: Vec<Vec2> = walls.solids.iter().map(|b| b.world_center()).collect();
-        let laminar = 4.0 * c.kinematic_viscosity;
         Self::for_each_solid_pair(c, fluid, walls, |k, x, wall, i, pair| {
             let s = &self.state[i];
             let rho_i = s.density * c.rest_density / s.inverse_mass;
+            let laminar = Laminar::at(fluid, c.kinematic_viscosity, i).own();
             let coefficient = laminar * c.rest_density / (rho_i + c.rest_density);
             let v_b = Vec2::new(walls.data.vx[wall], walls.data.vy[wall]);
             let mut a = coefficient * pair.friction * (self.velocity[i] - v_b);
@@ -59,7 +60,8 @@ impl Dfsph {
                 let r = fluid.points.get(i) - x;
                 a += c.gravity.dot(r) * pair.gradient;
             }
-            let force = -c.mass * a;
+            // The particle's mass is its liquid's: `mᵢ = ρ₀ V / (1/rᵢ)`.
+            let force = -c.mass / s.inverse_mass * a;
             sums[k].0 += force;
             sums[k].1 += (x - centers[k]).perp_dot(force);
         });

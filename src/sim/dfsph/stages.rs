@@ -37,7 +37,8 @@ impl PressureStages for Dfsph {
     /// Step 2: makes the velocity field divergence-free.
     fn correct_velocities(&mut self, s: &mut Shared, parallel: &impl Parallel) {
         let c = s.constants;
-        let dt = divergence_step(&s.clock, &c, s.snapshot.max_speed);
+        let limits = c.with_largest_viscosity(s.snapshot.max_viscosity);
+        let dt = divergence_step(&s.clock, &limits, s.snapshot.max_speed);
         let iterations = self.solve_divergence(&c, dt, parallel);
         s.iterations.divergence += iterations;
         s.iterations.total += iterations as u64;
@@ -67,7 +68,8 @@ impl PressureStages for Dfsph {
     }
 
     fn step_limit(&self, s: &Shared, max_acceleration: f32) -> f32 {
-        self.stable_time_step(&s.constants, max_acceleration)
+        let limits = (s.constants).with_largest_viscosity(s.snapshot.max_viscosity);
+        self.stable_time_step(&limits, max_acceleration)
     }
 
     /// Step 4, its start: the velocities predicted under every particle's acceleration
