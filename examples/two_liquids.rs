@@ -28,11 +28,14 @@ const LAYERS: [(f32, FluidMaterial); 3] = [
     (0.04, FluidMaterial(1)),
 ];
 
-/// Water at 5 mm spacing with oil and brine, on the default solver.
+/// Water at 5 mm spacing with oil and brine, on the default solver at three spacings' support:
+/// at two, the particles' arrangement holds the few pascals that lift a stirred-in drop of oil
+/// back out of the water (`docs/physics.md`, "Two liquids").
 fn cup_params() -> SphParams {
     SphParams {
         tank: Some(CUP),
         particle_spacing: 0.005,
+        support_ratio: 3.0,
         liquids: vec![Liquid::oil(), Liquid::brine()],
         max_substeps: 40,
         ..SphParams::water()
