@@ -32,15 +32,26 @@ fn lock_exchange(
     let half = Vec2::new(length / 2.0, depth);
     let left = FluidBlock::new(Vec2::ZERO, half).positions_for(&params);
     let right = FluidBlock::new(Vec2::new(length / 2.0, 0.0), half).positions_for(&params);
-    let n = left.len();
+    two_liquids(&params, left, right, ratio).0
+}
+
+/// A fluid of `params` with the base liquid at `base` and a liquid `ratio` times as dense at
+/// `other` (those particles last, their ratios set), and how many are the base liquid.
+fn two_liquids(
+    params: &SphParams,
+    base: Vec<Vec2>,
+    other: Vec<Vec2>,
+    ratio: f32,
+) -> (SliceFluid, usize) {
+    let n = base.len();
     let mut f = SliceFluid::new(
         params.constants().expect("valid"),
-        left.into_iter().chain(right).collect(),
+        base.into_iter().chain(other).collect(),
     );
     f.rest_ratio = (0..f.len())
         .map(|i| if i < n { 1.0 } else { ratio })
         .collect();
-    f
+    (f, n)
 }
 
 /// The least-squares slope of `(x, y)` points: of pressure against height (Pa/m) over `(y,
@@ -56,6 +67,20 @@ fn slope(points: &[(f32, f32)]) -> f32 {
         (c + dy * (p as f64 - mp), v + dy * dy)
     });
     (cov / var) as f32
+}
+
+/// Asserts that the layer `name`'s `(y, p)` points fall with height at `expected` Pa/m (its
+/// `ρ g`) within the fraction `tolerance`.
+fn assert_layer_slope(name: &str, points: &[(f32, f32)], expected: f32, tolerance: f32) {
+    let measured = -slope(points);
+    println!(
+        "{name} layer: {measured:.0} Pa/m against ρg = {expected:.0} Pa/m ({:+.1}%)",
+        100.0 * (measured / expected - 1.0)
+    );
+    assert!(
+        (measured / expected - 1.0).abs() < tolerance,
+        "{name}: {measured} Pa/m against {expected} Pa/m"
+    );
 }
 
 /// The heights and pressures of the particles of the dense liquid (`dense`) or the base one,
@@ -107,15 +132,7 @@ fn a_dense_liquid_beside_water_runs_under_it_and_settles_in_layers() {
         "not in layers: dense up to {dense_top} m, water from {water_bottom} m"
     );
     for (name, points, expected) in [("dense", dense, ratio * rho * g), ("water", water, rho * g)] {
-        let measured = -slope(&points);
-        println!(
-            "{name} layer: {measured:.0} Pa/m against ρg = {expected:.0} Pa/m ({:+.1}%)",
-            100.0 * (measured / expected - 1.0)
-        );
-        assert!(
-            (measured / expected - 1.0).abs() < 0.08,
-            "{name}: {measured} Pa/m against {expected} Pa/m"
-        );
+        assert_layer_slope(name, &points, expected, 0.08);
     }
 }
 
@@ -208,14 +225,7 @@ fn two_layers_at_rest_carry_each_its_own_hydrostatic_slope() {
         let water = FluidBlock::new(Vec2::ZERO, Vec2::new(width, depth)).positions_for(&params);
         let oil =
             FluidBlock::new(Vec2::new(0.0, depth), Vec2::new(width, depth)).positions_for(&params);
-        let n = water.len();
-        let mut f = SliceFluid::new(
-            params.constants().expect("valid"),
-            water.into_iter().chain(oil).collect(),
-        );
-        f.rest_ratio = (0..f.len())
-            .map(|i| if i < n { 1.0 } else { 0.5 })
-            .collect();
+        let (mut f, _) = two_liquids(&params, water, oil, 0.5);
         run(&mut f, seconds);
         assert_eq!(f.non_finite(), 0);
         let (rho, g) = (params.rest_density, params.gravity.length());
@@ -309,18 +319,9 @@ fn a_box_rides_on_the_interface_at_the_two_layer_draft() {
     let lower = FluidBlock::new(Vec2::ZERO, Vec2::new(width, water)).positions_for(&params);
     let upper =
         FluidBlock::new(Vec2::new(0.0, water), Vec2::new(width, oil)).positions_for(&params);
-    let lower: Vec<Vec2> = lower.into_iter().filter(clear).collect();
-    let n = lower.len();
-    let mut f = SliceFluid::new(
-        c,
-        lower
-            .into_iter()
-            .chain(upper.into_iter().filter(clear))
-            .collect(),
-    );
-    f.rest_ratio = (0..f.len())
-        .map(|i| if i < n { 1.0 } else { oil_ratio })
-        .collect();
+    let lower = lower.into_iter().filter(clear).collect();
+    let upper = upper.into_iter().filter(clear).collect();
+    let (mut f, _) = two_liquids(&params, lower, upper, oil_ratio);
     f.solids_mut().push(solid);
     let mass = box_density * c.rest_density * box_size.x * box_size.y;
     let inertia = mass * box_size.length_squared() / 12.0;
@@ -477,14 +478,7 @@ fn a_heavier_liquid_poured_on_a_lighter_one_settles_under_it() {
     let pool = FluidBlock::new(Vec2::ZERO, Vec2::new(width, water)).positions_for(&params);
     let column = FluidBlock::new(Vec2::new(0.075, water + 0.02), Vec2::new(0.15, 0.12))
         .positions_for(&params);
-    let n = pool.len();
-    let mut f = SliceFluid::new(
-        params.constants().expect("valid"),
-        pool.into_iter().chain(column).collect(),
-    );
-    f.rest_ratio = (0..f.len())
-        .map(|i| if i < n { 1.0 } else { ratio })
-        .collect();
+    let (mut f, n) = two_liquids(&params, pool, column, ratio);
     run(&mut f, 15.0);
     assert_eq!(f.non_finite(), 0);
     let (rho, g) = (f.constants().rest_density, f.constants().gravity.length());
@@ -517,14 +511,6 @@ fn a_heavier_liquid_poured_on_a_lighter_one_settles_under_it() {
             .filter(|&i| (i >= n) == dense && (range.0..range.1).contains(&f.position[i].y))
             .map(|i| (f.position[i].y, f.pressure[i]))
             .collect();
-        let measured = -slope(&points);
-        println!(
-            "{name} layer: {measured:.0} Pa/m against {expected:.0} Pa/m ({:+.1}%)",
-            100.0 * (measured / expected - 1.0)
-        );
-        assert!(
-            (measured / expected - 1.0).abs() < 0.03,
-            "{name}: {measured} Pa/m against {expected} Pa/m"
-        );
+        assert_layer_slope(name, &points, expected, 0.03);
     }
 }
