@@ -14,8 +14,8 @@
 use super::components::{
     Acceleration, Density, FluidIndex, FluidParticle, Position, Pressure, Stiffness, Velocity,
 };
-use super::liquids::FluidMaterial;
-use super::resources::{LiquidConstants, SphSolver, SphStats};
+use super::liquids::{FluidMaterial, LiquidConstants};
+use super::resources::{SphSolver, SphStats};
 use crate::schedule::{SphSubstep, SphSubstepSystems};
 use crate::sim::parallel::{PARALLEL_SLOTS, Parallel, Rayon, Sequential};
 use crate::sim::step::{Particles, Stage, StepLength};

@@ -76,17 +76,35 @@ impl Liquid {
 #[reflect(Component, Default, Debug, PartialEq)]
 pub struct FluidMaterial(pub u8);
 
+/// What the step needs of one liquid.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct LiquidConstants {
+    /// Its rest density over the base liquid's.
+    pub ratio: f32,
+    /// Its kinematic viscosity, m²/s.
+    pub viscosity: f32,
+}
+
 impl SphParams {
     /// The rest density of `material`'s liquid over the base liquid's (one for the base liquid
     /// and for a material past the list's end).
     pub fn density_ratio(&self, material: FluidMaterial) -> f32 {
-        match material.0.checked_sub(1) {
-            Some(k) => self
-                .liquids
-                .get(k as usize)
-                .map_or(1.0, |liquid| liquid.rest_density / self.rest_density),
-            None => 1.0,
-        }
+        (self.liquid_constants())
+            .nth(material.0 as usize)
+            .map_or(1.0, |liquid| liquid.ratio)
+    }
+
+    /// The base liquid's constants, then each of [`liquids`](Self::liquids)'.
+    pub(super) fn liquid_constants(&self) -> impl Iterator<Item = LiquidConstants> + '_ {
+        let base = LiquidConstants {
+            ratio: 1.0,
+            viscosity: self.kinematic_viscosity,
+        };
+        let others = self.liquids.iter().map(|liquid| LiquidConstants {
+            ratio: liquid.rest_density / self.rest_density,
+            viscosity: liquid.kinematic_viscosity,
+        });
+        std::iter::once(base).chain(others)
     }
 
     /// Refuses a liquid whose rest density is not finite or not within

@@ -1,6 +1,7 @@
 //! The fluid plugin's resources: the solver's state ([`SphSolver`]), the tick's statistics
 //! ([`SphStats`]) and whether the last parameters were taken ([`SphParamsStatus`]).
 
+use super::liquids::LiquidConstants;
 use super::params::{SphParams, SphParamsError};
 use crate::sim::clock::SubstepClock;
 use crate::sim::config::{PressureSolver, SphConstants};
@@ -29,30 +30,6 @@ pub struct SphSolver {
     /// What the step needs of each [`FluidMaterial`](super::FluidMaterial)'s liquid, by
     /// material (the base liquid first).
     pub(crate) liquids: Vec<LiquidConstants>,
-}
-
-/// What the step needs of one liquid.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) struct LiquidConstants {
-    /// Its rest density over the base liquid's.
-    pub ratio: f32,
-    /// Its kinematic viscosity, m²/s.
-    pub viscosity: f32,
-}
-
-impl SphParams {
-    /// The base liquid's constants, then each of [`liquids`](Self::liquids)'.
-    fn liquid_constants(&self) -> impl Iterator<Item = LiquidConstants> + '_ {
-        let base = LiquidConstants {
-            ratio: 1.0,
-            viscosity: self.kinematic_viscosity,
-        };
-        let others = self.liquids.iter().map(|liquid| LiquidConstants {
-            ratio: liquid.rest_density / self.rest_density,
-            viscosity: liquid.kinematic_viscosity,
-        });
-        std::iter::once(base).chain(others)
-    }
 }
 
 impl Default for SphSolver {
